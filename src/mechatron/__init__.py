@@ -1,0 +1,20 @@
+"""Mechatron: acausal modeling, simulation, identification and real-time code for
+mechatronic systems.
+
+>>> import mechatron as mt
+>>> res = mt.simulate(mt.models.get("dc_motor").build(), 0.5)
+"""
+
+from mechatron.compiler import CompiledModel, compile_model
+from mechatron.core import (Across, Component, Connector, Domain, Input, Output, Parameter,
+                            Start, System, Through, Variable, connect, der, if_else)
+from mechatron.results import SimResult, SolverStats
+from mechatron.solvers import simulate
+from mechatron import library, models  # noqa: E402  (subpackages of the public API)
+
+__version__ = "0.1.0"
+
+__all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable", "Start",
+           "Across", "Through", "Input", "Output", "connect", "der", "if_else",
+           "compile_model", "CompiledModel", "simulate", "SimResult", "SolverStats",
+           "library", "models"]

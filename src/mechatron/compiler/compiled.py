@@ -1,0 +1,148 @@
+"""The compiled model: CasADi functions plus the metadata that names their entries.
+
+The integration state is ``X = [x; s; c; te]``: the continuous states ``x``, one mode
+``s`` in {-1, +1} per relation, and per relation an event counter ``c`` and the time of
+its last event ``te`` (both piecewise constant; they make event statistics and event times
+part of the native integration, with no Python callback).
+"""
+
+from __future__ import annotations
+
+import pickle
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from mechatron.errors import DataError, ParameterError
+from mechatron.units import to_si
+
+__all__ = ["CompiledModel"]
+
+_FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition")
+
+
+@dataclass
+class CompiledModel:
+    """A model lowered to CasADi functions ``f(t, X, z, p)``.
+
+    Attributes
+    ----------
+    name : str
+    state_names : list of str
+        Continuous states (instance paths, ``der(x)`` for a derivative that is a state).
+    alg_names : list of str
+        Algebraic unknowns left to the DAE solver (tearing variables of nonlinear loops).
+    param_names, param_units, p0
+        Parameters by instance path, their units and default values (SI).
+    names, units, docs
+        Every logged variable by instance path.
+    relations : list of (owner, op)
+        The event-generating relations with the component they belong to.
+    report : dict
+        Counts before/after each pass, chosen states, pass timings.
+    """
+
+    name: str
+    state_names: list[str]
+    alg_names: list[str]
+    param_names: list[str]
+    param_units: list[str]
+    p0: np.ndarray
+    names: list[str]
+    units: list[str]
+    docs: list[str]
+    relations: list[tuple[str, str]]
+    x_start: np.ndarray
+    x_priority: list[str]
+    z_start: np.ndarray
+    targets: list[tuple[str, int, float, str]]   # (name, output index, value, priority)
+    f_ode: ca.Function = None
+    f_alg: ca.Function = None
+    f_out: ca.Function = None
+    f_zero: ca.Function = None
+    f_dist: ca.Function = None
+    f_transition: ca.Function = None
+    report: dict = field(default_factory=dict)
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    # -- sizes ----------------------------------------------------------------------------
+    @property
+    def nx(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def nr(self) -> int:
+        return len(self.relations)
+
+    @property
+    def nz(self) -> int:
+        return len(self.alg_names)
+
+    @property
+    def nX(self) -> int:
+        return self.nx + 3 * self.nr
+
+    # -- parameters -----------------------------------------------------------------------
+    def parameter_vector(self, params: dict | None = None) -> np.ndarray:
+        """Default parameter values with ``params`` (path -> value or quantity) applied."""
+        p = self.p0.copy()
+        if not params:
+            return p
+        index = self._cache.get("pindex")
+        if index is None:
+            index = self._cache["pindex"] = {n: i for i, n in enumerate(self.param_names)}
+        unknown = [k for k in params if k not in index]
+        if unknown:
+            import difflib
+            hints = {k: difflib.get_close_matches(k, self.param_names, 3) for k in unknown}
+            text = "; ".join(f"'{k}'" + (f" (did you mean {', '.join(v)}?)" if v else "")
+                             for k, v in hints.items())
+            raise ParameterError(f"model '{self.name}': unknown parameter(s) {text}. "
+                                 f"Parameters: {', '.join(self.param_names[:12])}"
+                                 f"{' ...' if len(self.param_names) > 12 else ''}.",
+                                 path=self.name)
+        for key, value in params.items():
+            i = index[key]
+            p[i] = to_si(value, self.param_units[i], key)
+        return p
+
+    # -- persistence ----------------------------------------------------------------------
+    def save(self, path) -> Path:
+        """Save to a file (functions serialized by CasADi); :meth:`load` reads it back."""
+        path = Path(path)
+        with open(path, "wb") as fh:
+            pickle.dump(self, fh, protocol=pickle.HIGHEST_PROTOCOL)
+        return path
+
+    @classmethod
+    def load(cls, path) -> "CompiledModel":
+        path = Path(path)
+        if not path.exists():
+            raise DataError(f"{path}: no such file. Save a model with "
+                            "CompiledModel.save(path) first.", path=str(path))
+        with open(path, "rb") as fh:
+            obj = pickle.load(fh)
+        if not isinstance(obj, cls):
+            raise DataError(f"{path}: not a saved CompiledModel.", path=str(path))
+        return obj
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        for key in _FUNCS:
+            f = state.get(key)
+            state[key] = f.serialize() if f is not None else None
+        state["_cache"] = {}
+        return state
+
+    def __setstate__(self, state):
+        for key in _FUNCS:
+            if state.get(key) is not None:
+                state[key] = ca.Function.deserialize(state[key])
+        self.__dict__.update(state)
+
+    def __repr__(self) -> str:
+        return (f"<CompiledModel '{self.name}': {self.nx} states, {self.nz} algebraic, "
+                f"{len(self.param_names)} parameters, {len(self.names)} logged variables, "
+                f"{self.nr} event relations>")

@@ -1,0 +1,432 @@
+"""Passes 1 and 2: flatten the instance tree, bind symbols, collect equations, turn
+connections into equations, and check the model's topology.
+
+The result is a :class:`FlatModel`: every parameter and variable by instance path with its
+CasADi symbol, every equation as a residual with its origin, and the alias pairs that
+connections imply (handed to alias elimination rather than written as equations).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+
+from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
+from mechatron.core.context import BuildContext
+from mechatron.core.declarations import (Across, Input, Output, Parameter, Start, Through,
+                                         Variable)
+from mechatron.errors import ConnectError, ModelError, ParameterError, UnitError
+from mechatron.units import to_si
+
+__all__ = ["FlatModel", "FlatVariable", "FlatParameter", "FlatEquation", "flatten"]
+
+
+@dataclass
+class FlatParameter:
+    name: str
+    sym: ca.SX
+    value: float
+    unit: str
+    doc: str
+    owner: str
+
+
+@dataclass
+class FlatVariable:
+    name: str
+    sym: ca.SX
+    unit: str
+    doc: str
+    kind: str          # "variable", "across", "through", "input", "output"
+    owner: str         # path of the owning component (for ports: the component)
+    start: float | None = None
+    priority: str = "none"
+    hint: str = ""     # what to try when this variable is left unmatched
+
+
+@dataclass
+class FlatEquation:
+    residual: ca.SX
+    origin: str        # "r1: v == R*i" or "connect(r1.n, c1.p)"
+    owner: str = ""    # path of the component the equation belongs to
+
+
+@dataclass
+class FlatModel:
+    name: str
+    context: BuildContext
+    parameters: dict[str, FlatParameter] = field(default_factory=dict)
+    variables: dict[str, FlatVariable] = field(default_factory=dict)
+    equations: list[FlatEquation] = field(default_factory=list)
+    aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
+    components: dict[str, str] = field(default_factory=dict)  # path -> class name
+
+    @property
+    def time(self) -> ca.SX:
+        return self.context.time
+
+
+def _walk(root: Element):
+    stack = [root]
+    while stack:
+        el = stack.pop()
+        yield el
+        stack.extend(reversed(list(el._children.values())))
+
+
+def _as_equations(items, where: str):
+    out = []
+    stack = [items]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, (list, tuple)):
+            stack.extend(reversed(item))
+        elif item is None:
+            continue
+        else:
+            out.append(item)
+    return out
+
+
+def flatten(model: Component, name: str | None = None) -> FlatModel:
+    """Flatten ``model``: bind symbols, collect equations and connections, validate.
+
+    All problems with values, connections and references are collected and raised once.
+    """
+    if not isinstance(model, Component):
+        raise TypeError(f"compile_model: expected a Component instance, got {model!r}.")
+    name = name or model._name or type(model).__name__
+    flat = FlatModel(name=name, context=BuildContext())
+    problems: list[str] = []
+    elements = list(_walk(model))
+    for el in elements:
+        if isinstance(el, Component) and el._partial and el is not model:
+            problems.append(f"{el.describe()}: {type(el).__name__} is a partial class "
+                            "(an interface); use a concrete component.")
+        if isinstance(el, Component):
+            flat.components[el.path] = type(el).__name__
+    _bind_symbols(flat, elements, problems)
+    try:
+        with flat.context:
+            connects = _collect_equations(flat, elements, problems)
+        _connections(flat, model, elements, connects, problems)
+    finally:
+        for el in elements:
+            el._syms = None
+    if problems:
+        kind = UnitError if all("expected a value in" in p for p in problems) else None
+        if kind is None:
+            kind = ParameterError if all(_is_value_problem(p) for p in problems) else ModelError
+        raise kind(_summary(name, problems), problems=problems, path=name)
+    return flat
+
+
+def _is_value_problem(p: str) -> bool:
+    return " must be " in p or "no value" in p or "expected a" in p or "cannot read" in p
+
+
+def _summary(name: str, problems: list[str]) -> str:
+    if len(problems) == 1:
+        return problems[0]
+    return f"model '{name}': {len(problems)} problems:\n  " + "\n  ".join(problems)
+
+
+def _bind_symbols(flat: FlatModel, elements, problems) -> None:
+    ctx = flat.context
+    for el in elements:
+        syms = {}
+        owner = el._parent if isinstance(el, Connector) else el
+        owner_path = owner.path if owner is not None else ""
+        for key, decl in type(el)._declarations.items():
+            path = f"{el.path}.{key}" if el.path else key
+            sym = ca.SX.sym(path)
+            syms[key] = sym
+            if isinstance(decl, Parameter):
+                raw = el._values.get(key, decl.default)
+                value = float("nan")
+                if raw is None:
+                    problems.append(f"{el.describe()}: parameter {key} has no value and no "
+                                    f"default. Give one, e.g. {type(el).__name__}"
+                                    f"({key}=...).")
+                else:
+                    try:
+                        value = to_si(raw, decl.unit, path)
+                    except UnitError as exc:
+                        problems.append(str(exc))
+                    else:
+                        _check_range(el, key, decl, value, problems)
+                flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
+                                                      owner_path)
+            else:
+                kind = ("across" if isinstance(decl, Across) else
+                        "through" if isinstance(decl, Through) else
+                        "input" if isinstance(decl, Input) else
+                        "output" if isinstance(decl, Output) else "variable")
+                start, priority = decl.start, decl.priority
+                given = el._starts.get(key)
+                if isinstance(given, Start):
+                    try:
+                        start = to_si(given.value, decl.unit, path)
+                    except UnitError as exc:
+                        problems.append(str(exc))
+                    priority = given.priority
+                flat.variables[path] = FlatVariable(path, sym, decl.unit, decl.doc, kind,
+                                                    owner_path, start, priority,
+                                                    _domain_hint(el, decl))
+                ctx.unknowns[path] = sym
+        el._syms = syms
+
+
+def _domain_hint(el, decl) -> str:
+    if isinstance(el, Connector):
+        return _hint(el) or (type(el).domain.hint if type(el).domain else "")
+    return ""
+
+
+def _check_range(el, key, decl, value, problems) -> None:
+    if value != value:
+        problems.append(f"{el.describe()}: {key} is NaN.")
+    if decl.min is not None and value < decl.min:
+        problems.append(f"{el.describe()}: {key} must be >= {decl.min:g}, got {value:g}.")
+    if decl.max is not None and value > decl.max:
+        problems.append(f"{el.describe()}: {key} must be <= {decl.max:g}, got {value:g}.")
+
+
+def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connect, str]]:
+    connects = []
+    for el in elements:
+        if not isinstance(el, Component):
+            continue
+        where = el.path or flat.name
+        for klass in type(el).__mro__:
+            own = vars(klass).get("equations")
+            if own is None or klass is Component:
+                continue
+        # parents first, each class's own equations once
+        for klass in reversed(type(el).__mro__):
+            own = vars(klass).get("equations")
+            if own is None or klass is Component:
+                continue
+            try:
+                items = own(el)
+            except ModelError:
+                raise
+            except Exception as exc:
+                raise ModelError(f"{el.describe()}: {klass.__name__}.equations() failed: "
+                                 f"{type(exc).__name__}: {exc}", path=where) from exc
+            for k, item in enumerate(_as_equations(items, where)):
+                if isinstance(item, Connect):
+                    connects.append((item, where))
+                    continue
+                _add_equation(flat, el, klass, k, item, problems)
+    return connects
+
+
+def _add_equation(flat, el, klass, k, item, problems) -> None:
+    where = el.path or flat.name
+    if isinstance(item, (bool, int, float)) or not isinstance(item, (ca.SX, ca.DM)):
+        problems.append(f"{el.describe()}: equation {k + 1} of {klass.__name__} is "
+                        f"{item!r}, not an equation. Write equations with == between "
+                        "expressions of variables.")
+        return
+    item = ca.SX(item)
+    for j in range(item.numel()):
+        e = item[j]
+        if not e.is_op(ca.OP_EQ):
+            problems.append(f"{el.describe()}: equation {k + 1} of {klass.__name__} is not "
+                            f"an equation ({str(e)[:60]}). Write it with ==.")
+            continue
+        lhs, rhs = e.dep(0), e.dep(1)
+        flat.equations.append(FlatEquation(lhs - rhs, f"{where}: {_short(lhs)} == "
+                                                      f"{_short(rhs)}", el.path))
+
+
+def _short(expr, limit: int = 80) -> str:
+    text = str(expr)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+class _UnionFind:
+    def __init__(self):
+        self.parent: dict[int, int] = {}
+
+    def find(self, a: int) -> int:
+        self.parent.setdefault(a, a)
+        root = a
+        while self.parent[root] != root:
+            root = self.parent[root]
+        while self.parent[a] != root:
+            self.parent[a], a = root, self.parent[a]
+        return root
+
+    def union(self, a: int, b: int) -> None:
+        ra, rb = self.find(a), self.find(b)
+        if ra != rb:
+            self.parent[rb] = ra
+
+
+def _port_path(p) -> str:
+    if isinstance(p, SignalRef):
+        return p.path()
+    return p.path
+
+
+def _resolve(flat: FlatModel, port, sym_owner):
+    """A Connector, a SignalRef, or a bound signal symbol -> Connector or SignalRef."""
+    if isinstance(port, (Connector, SignalRef)):
+        return port
+    if isinstance(port, ca.SX) and port.is_scalar() and port.is_symbolic():
+        ref = sym_owner.get(port.name())
+        if ref is not None:
+            return ref
+    return None
+
+
+def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
+    sym_owner: dict[str, SignalRef] = {}
+    for el in elements:
+        for key, decl in type(el)._declarations.items():
+            if isinstance(decl, (Input, Output)):
+                sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
+    uf = _UnionFind()
+    ports: dict[int, object] = {}
+    for con, where in connects:
+        resolved = []
+        for p in con.ports:
+            r = _resolve(flat, p, sym_owner)
+            if r is None:
+                problems.append(f"{where}: connect() takes ports, got {p!r}. Pass a port "
+                                "such as r1.p or a signal such as src.y.")
+                continue
+            resolved.append(r)
+        for a, b in zip(resolved, resolved[1:]):
+            msg = _compatible(a, b)
+            if msg:
+                problems.append(msg)
+                continue
+            ka = _key(a)
+            kb = _key(b)
+            ports[ka], ports[kb] = a, b
+            uf.union(ka, kb)
+    groups: dict[int, list] = {}
+    for k, p in ports.items():
+        groups.setdefault(uf.find(k), []).append(p)
+    connected: set[int] = set(ports)
+    for group in groups.values():
+        group.sort(key=_port_path)
+        if isinstance(group[0], SignalRef):
+            _signal_set(flat, group, problems)
+        else:
+            _physical_set(flat, group)
+    for el in elements:
+        if isinstance(el, Connector) and id(el) not in connected and el._parent is not model:
+            problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
+                            "or remove the component. "
+                            f"{_hint(el)}".rstrip())
+        if isinstance(el, Component):
+            for key, decl in type(el)._declarations.items():
+                if isinstance(decl, Input) and _sigkey(el, key) not in connected:
+                    problems.append(f"signal input '{_join(el.path, key)}' is not connected. "
+                                    "Connect a source, e.g. blocks.Constant.")
+    _check_references(flat, model, elements, uf, ports, problems)
+
+
+def _join(a, b):
+    return f"{a}.{b}" if a else b
+
+
+def _hint(port: Connector) -> str:
+    for decl in type(port)._declarations.values():
+        if isinstance(decl, Across) and decl.hint:
+            return decl.hint
+    return ""
+
+
+def _key(p) -> int:
+    return _sigkey(p.owner, p.name) if isinstance(p, SignalRef) else id(p)
+
+
+_sigkeys: dict[tuple[int, str], int] = {}
+
+
+def _sigkey(owner, name) -> int:
+    return hash((id(owner), name)) & 0x7FFFFFFFFFFFFFF | 1 << 62
+
+
+def _compatible(a, b) -> str:
+    if isinstance(a, SignalRef) != isinstance(b, SignalRef):
+        sig, phys = (a, b) if isinstance(a, SignalRef) else (b, a)
+        return (f"cannot connect signal '{sig.path()}' with physical port '{phys.path}' "
+                f"({phys.domain}). Use a converter between signals and physical "
+                "quantities (e.g. a controlled source or a sensor).")
+    if isinstance(a, Connector) and type(a).domain is not type(b).domain:
+        return (f"cannot connect '{a.path}' ({type(a).domain}) with '{b.path}' "
+                f"({type(b).domain}): ports belong to different domains.")
+    if isinstance(a, Connector) and type(a) is not type(b) and (
+            type(a).across_names() != type(b).across_names()):
+        return (f"cannot connect '{a.path}' ({type(a).__name__}) with '{b.path}' "
+                f"({type(b).__name__}): the connectors carry different variables.")
+    return ""
+
+
+def _signal_set(flat: FlatModel, group: list[SignalRef], problems) -> None:
+    outputs = [g for g in group if isinstance(g.declaration, Output)]
+    paths = ", ".join(g.path() for g in group)
+    if not outputs:
+        problems.append(f"signals {paths} are connected without an output to drive them. "
+                        "Connect a source or a block output.")
+        return
+    if len(outputs) > 1:
+        problems.append(f"signal outputs {', '.join(o.path() for o in outputs)} are "
+                        "connected together; an input can be driven by one output only.")
+        return
+    src = outputs[0].path()
+    for g in group:
+        if g is not outputs[0]:
+            flat.aliases.append((g.path(), src, 1.0, f"connect({src}, {g.path()})"))
+
+
+def _physical_set(flat: FlatModel, group: list[Connector]) -> None:
+    names = ", ".join(p.path for p in group)
+    origin = f"connect({names})"
+    cls = type(group[0])
+    first = group[0].path
+    for a in cls.across_names():
+        for p in group[1:]:
+            flat.aliases.append((f"{p.path}.{a}", f"{first}.{a}", 1.0, origin))
+    for t in cls.through_names():
+        if len(group) == 2:
+            flat.aliases.append((f"{group[1].path}.{t}", f"{first}.{t}", -1.0, origin))
+        else:
+            total = sum((flat.variables[f"{p.path}.{t}"].sym for p in group[1:]),
+                        flat.variables[f"{first}.{t}"].sym)
+            flat.equations.append(FlatEquation(total, f"{origin}: sum of {t} == 0"))
+
+
+def _check_references(flat, model, elements, uf: _UnionFind, ports, problems) -> None:
+    """Every network of a domain that needs a reference must contain one."""
+    net = _UnionFind()
+    members: dict[int, list[Connector]] = {}
+    for el in elements:
+        if not isinstance(el, Component):
+            continue
+        by_domain: dict[object, list[int]] = {}
+        for port in el.ports.values():
+            root = uf.find(id(port))
+            by_domain.setdefault(type(port).domain, []).append(root)
+        for roots in by_domain.values():
+            for r in roots[1:]:
+                net.union(roots[0], r)
+    for k, p in ports.items():
+        if isinstance(p, Connector):
+            members.setdefault(net.find(uf.find(k)), []).append(p)
+    for root, plist in members.items():
+        domain = type(plist[0]).domain
+        if domain is None or not domain.needs_reference:
+            continue
+        owners = sorted({p._parent.path for p in plist if p._parent is not None})
+        if any(p._parent is not None and p._parent._reference for p in plist):
+            continue
+        problems.append(f"{domain.name} network of {', '.join(owners)} has no reference. "
+                        f"{domain.hint or 'Add a reference component to it.'}")

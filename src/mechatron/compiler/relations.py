@@ -1,0 +1,116 @@
+"""Relations (``<``, ``<=``, ``sign``) become event-generating modes.
+
+Every relation whose value may change during a simulation is replaced by a placeholder
+symbol. Later the placeholder is bound to a *mode* ``s`` in {-1, +1}: constant between
+events, flipped when the indicator ``s * d`` crosses zero (located by the variable-step
+solver, or checked at each step end by the fixed-step solvers). This is how Modelica tools
+and Simscape keep the integrator away from discontinuities.
+
+The rewrite walks CasADi's instruction list of the equations that contain relations and
+rebuilds them with ``SX.unary``/``SX.binary``, so no Python source is parsed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+__all__ = ["Relation", "extract_relations"]
+
+_REL_OPS = {ca.OP_LT: "<", ca.OP_LE: "<=", ca.OP_SIGN: "sign"}
+
+
+@dataclass
+class Relation:
+    """One relation: value ``(s+1)/2`` for ``<``/``<=`` (or ``s`` for sign), where
+    ``s = +1`` while ``d > 0`` (``d >= 0`` for ``<=``)."""
+
+    placeholder: ca.SX
+    op: str          # "<", "<=", "sign"
+    d: ca.SX         # the distance whose sign is the mode
+    owner: str       # component path, for event statistics
+
+
+def extract_relations(residuals: list[ca.SX], owners: list[str],
+                      symbols: list[ca.SX]) -> tuple[list[ca.SX], list[Relation]]:
+    """Replace the relations in ``residuals`` by placeholders.
+
+    Parameters
+    ----------
+    residuals : list of SX
+        Scalar expressions.
+    owners : list of str
+        Component path of each residual.
+    symbols : list of SX
+        Every free symbol the residuals may contain (unknowns, parameters, time).
+    """
+    if not residuals:
+        return residuals, []
+    f = ca.Function("scan", [ca.vertcat(*symbols)], [ca.vertcat(*residuals)])
+    n = f.n_instructions()
+    ops = [f.instruction_id(k) for k in range(n)]
+    if not any(op in _REL_OPS for op in ops):
+        return residuals, []
+    # which outputs depend on a relation: propagate a flag through the work vector
+    flagged_work: dict[int, bool] = {}
+    touched: set[int] = set()
+    for k, op in enumerate(ops):
+        if op == ca.OP_OUTPUT:
+            ins = f.instruction_input(k)
+            if flagged_work.get(ins[0]):
+                touched.add(f.instruction_output(k)[1])
+            continue
+        if op in (ca.OP_INPUT, ca.OP_CONST, ca.OP_PARAMETER):
+            flagged_work[f.instruction_output(k)[0]] = False
+            continue
+        ins = f.instruction_input(k)
+        arity = 1 if _is_unary(op) else 2
+        flag = op in _REL_OPS or any(flagged_work.get(i, False) for i in ins[:arity])
+        flagged_work[f.instruction_output(k)[0]] = flag
+    out = list(residuals)
+    relations: list[Relation] = []
+    for j in sorted(touched):
+        out[j] = _rebuild(residuals[j], owners[j], relations)
+    return out, relations
+
+
+def _is_unary(op: int) -> bool:
+    return op in _UNARY
+
+
+_UNARY = {getattr(ca, n) for n in dir(ca) if n.startswith("OP_") and n in (
+    "OP_NEG", "OP_EXP", "OP_LOG", "OP_SQ", "OP_SQRT", "OP_SIN", "OP_COS", "OP_TAN",
+    "OP_ASIN", "OP_ACOS", "OP_ATAN", "OP_FLOOR", "OP_CEIL", "OP_FABS", "OP_SIGN",
+    "OP_NOT", "OP_INV", "OP_SINH", "OP_COSH", "OP_TANH", "OP_ASINH", "OP_ACOSH",
+    "OP_ATANH", "OP_ERF", "OP_ERFINV", "OP_TWICE", "OP_ASSIGN", "OP_LOG1P", "OP_EXPM1")}
+
+
+def _rebuild(expr: ca.SX, owner: str, relations: list[Relation]) -> ca.SX:
+    syms = ca.symvar(expr)
+    f = ca.Function("one", syms, [expr])
+    work: dict[int, ca.SX] = {}
+    result = None
+    for k in range(f.n_instructions()):
+        op = f.instruction_id(k)
+        o = f.instruction_output(k)
+        i = f.instruction_input(k)
+        if op == ca.OP_INPUT:
+            work[o[0]] = syms[i[0]]
+        elif op == ca.OP_CONST:
+            work[o[0]] = ca.SX(f.instruction_constant(k))
+        elif op == ca.OP_OUTPUT:
+            result = work[i[0]]
+        elif op in _REL_OPS:
+            if op == ca.OP_SIGN:
+                d = work[i[0]]
+            else:
+                d = work[i[1]] - work[i[0]]  # a < b  <=>  b - a > 0
+            ph = ca.SX.sym(f"rel{len(relations)}[{owner}]")
+            relations.append(Relation(ph, _REL_OPS[op], d, owner))
+            work[o[0]] = ph
+        elif op in _UNARY:
+            work[o[0]] = ca.SX.unary(op, work[i[0]])
+        else:
+            work[o[0]] = ca.SX.binary(op, work[i[0]], work[i[1]])
+    return result if result is not None else expr

@@ -1,0 +1,11 @@
+"""The modeling language: domains, connectors, declarations, components, equations."""
+
+from mechatron.core.component import Component, Connect, Connector, Element, System
+from mechatron.core.context import connect, der, if_else
+from mechatron.core.declarations import (Across, Input, Output, Parameter, Start, Through,
+                                         Variable)
+from mechatron.core.domain import Domain
+
+__all__ = ["Component", "Connector", "Element", "System", "Connect", "connect", "der",
+           "if_else", "Across", "Through", "Input", "Output", "Parameter", "Variable",
+           "Start", "Domain"]

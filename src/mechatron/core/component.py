@@ -1,0 +1,272 @@
+"""Components, connectors and the programmatic builder.
+
+A *connector* is a port: a small set of across and through variables of one domain. A
+*component* declares parameters, variables, ports and sub-components as class attributes
+and returns its equations from ``equations()``. Equations add up along the class hierarchy
+like Modelica's ``extends``: the compiler calls every class's own ``equations`` in the
+order of the MRO, so a subclass can neither forget nor drop its parent's equations.
+
+A model is a component whose equations include ``connect(...)``; :class:`System` builds one
+programmatically for repeated structures.
+"""
+
+from __future__ import annotations
+
+import copy
+import numbers
+
+from mechatron.core.declarations import (Across, Declaration, Input, Output, Parameter,
+                                         Start, Through, Variable)
+from mechatron.core.domain import Domain
+from mechatron.errors import ModelError
+
+__all__ = ["Element", "Connector", "Component", "System", "SignalRef", "Connect"]
+
+
+class SignalRef:
+    """A reference to a signal port (an :class:`Input` or :class:`Output` of an instance),
+    as returned by attribute access outside compilation; used by ``connect``."""
+
+    __slots__ = ("owner", "name")
+
+    def __init__(self, owner: "Element", name: str):
+        self.owner = owner
+        self.name = name
+
+    @property
+    def declaration(self) -> Declaration:
+        return type(self.owner)._declarations[self.name]
+
+    def path(self) -> str:
+        return _join(self.owner.path, self.name)
+
+    def __repr__(self) -> str:
+        return f"<signal {self.path() or self.name}>"
+
+
+class Connect:
+    """A connection between ports, as returned by :func:`connect`."""
+
+    __slots__ = ("ports",)
+
+    def __init__(self, ports):
+        self.ports = tuple(ports)
+
+    def __repr__(self) -> str:
+        return f"connect({', '.join(map(repr, self.ports))})"
+
+
+def _join(prefix: str, name: str) -> str:
+    return f"{prefix}.{name}" if prefix else name
+
+
+class Element:
+    """Common base of connectors and components: declarations, sub-elements, a path."""
+
+    _declarations: dict[str, Declaration] = {}
+    _templates: dict[str, "Element"] = {}
+    _partial = True
+
+    def __init_subclass__(cls, partial: bool = False, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls._partial = partial
+        decls: dict[str, Declaration] = {}
+        templates: dict[str, Element] = {}
+        for klass in reversed(cls.__mro__):
+            own = [(k, v) for k, v in vars(klass).items() if isinstance(v, Declaration)]
+            for key, value in sorted(own, key=lambda kv: kv[1].order):
+                decls[key] = value
+            for key, value in vars(klass).items():
+                if isinstance(value, Element):
+                    templates[key] = value
+        cls._declarations = decls
+        cls._templates = templates
+
+    def __init__(self, *, doc: str = "", **kwargs):
+        self.doc = doc
+        self._name = ""
+        self._parent: Element | None = None
+        self._values: dict[str, object] = {}
+        self._starts: dict[str, Start] = {}
+        self._syms: dict | None = None
+        self._children: dict[str, Element] = {}
+        for key, template in type(self)._templates.items():
+            self._adopt(key, copy.deepcopy(template))
+        for key, value in kwargs.items():
+            self._set(key, value)
+
+    # -- construction -------------------------------------------------------------------
+    def __set_name__(self, owner, name):
+        self._name = name
+
+    def _adopt(self, name: str, child: "Element") -> "Element":
+        child._name = name
+        child._parent = self
+        self._children[name] = child
+        self.__dict__[name] = child
+        return child
+
+    def _set(self, key: str, value) -> None:
+        decl = type(self)._declarations.get(key)
+        if isinstance(decl, Parameter):
+            self._values[key] = value
+        elif isinstance(decl, Variable) and not isinstance(decl, (Input,)):
+            if isinstance(value, Start):
+                self._starts[key] = value
+            elif isinstance(value, (numbers.Real, str)) or hasattr(value, "magnitude"):
+                self._starts[key] = Start(value, "high")
+            else:
+                raise TypeError(f"{type(self).__name__}({key}=...): a start value must be "
+                                f"a number, a quantity or mt.Start, got {value!r}.")
+        else:
+            valid = [k for k, d in type(self)._declarations.items()
+                     if isinstance(d, Parameter)
+                     or (isinstance(d, Variable) and not isinstance(d, Input))]
+            raise TypeError(f"{type(self).__name__}() got an unexpected keyword '{key}'. "
+                            f"Valid names: {', '.join(valid) or '(none)'}.")
+
+    def __deepcopy__(self, memo):
+        clone = object.__new__(type(self))
+        memo[id(self)] = clone
+        for key, value in self.__dict__.items():
+            if key == "_parent":
+                clone.__dict__[key] = None
+            elif key in ("_syms",):
+                clone.__dict__[key] = None
+            else:
+                clone.__dict__[key] = copy.deepcopy(value, memo)
+        for name, child in clone._children.items():
+            child._parent = clone
+        return clone
+
+    # -- identity -----------------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self._name
+
+    @property
+    def path(self) -> str:
+        """Full instance path from the model root, e.g. ``"motor.emf.A"``."""
+        if self._parent is None:
+            return ""
+        return _join(self._parent.path, self._name)
+
+    def describe(self) -> str:
+        """``"Resistor 'r1'"``: the class and the path, for messages."""
+        return f"{type(self).__name__} '{self.path or self._name or '(top)'}'"
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.path or self._name or '(top)'}>"
+
+    # -- symbols (bound by the compiler) -------------------------------------------------
+    def _symbol(self, name: str):
+        if self._syms is not None:
+            return self._syms[name]
+        decl = type(self)._declarations[name]
+        if isinstance(decl, (Input, Output)):
+            return SignalRef(self, name)
+        raise ModelError(f"{self.describe()}: '{name}' has a value only while the model "
+                         "compiles. Use it inside equations(); read results from a "
+                         "SimResult.", path=_join(self.path, name))
+
+    @property
+    def time(self):
+        """The simulation time symbol (only inside ``equations()``)."""
+        from mechatron.core.context import current
+        return current().time
+
+
+class Connector(Element, partial=True):
+    """A port of one domain: its across and through variables."""
+
+    domain: Domain | None = None
+
+    def __init_subclass__(cls, domain: Domain | None = None, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if domain is not None:
+            cls.domain = domain
+        for key, decl in cls._declarations.items():
+            if not isinstance(decl, (Across, Through)):
+                raise ModelError(f"connector {cls.__name__}: '{key}' must be an Across or "
+                                 f"Through declaration, got {type(decl).__name__}.")
+
+    @classmethod
+    def across_names(cls) -> list[str]:
+        return [k for k, d in cls._declarations.items() if isinstance(d, Across)]
+
+    @classmethod
+    def through_names(cls) -> list[str]:
+        return [k for k, d in cls._declarations.items() if isinstance(d, Through)]
+
+
+class Component(Element, partial=True):
+    """Base of every component and model.
+
+    Subclasses declare :class:`~mechatron.Parameter`, :class:`~mechatron.Variable`, ports
+    (connector instances) and sub-components as class attributes and return equations (and
+    ``connect`` calls) from :meth:`equations`. Keyword arguments of the constructor set
+    parameter values and variable start values; an unknown keyword raises ``TypeError``.
+
+    Class keywords: ``partial=True`` for abstract bases (never instantiated in a model),
+    ``reference=True`` for references (ground) of a domain.
+    """
+
+    _reference = False
+
+    def __init_subclass__(cls, reference: bool = False, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls._reference = reference
+
+    def equations(self) -> list:
+        """Equations of this class (not of its parents), written with ``==``."""
+        return []
+
+    @property
+    def components(self) -> dict[str, "Component"]:
+        return {k: v for k, v in self._children.items() if isinstance(v, Component)}
+
+    @property
+    def ports(self) -> dict[str, Connector]:
+        return {k: v for k, v in self._children.items() if isinstance(v, Connector)}
+
+
+class System(Component):
+    """A model assembled programmatically, for repeated structures.
+
+    >>> m = System("ladder")
+    >>> r = m.add("r1", Resistor(R=1))
+    >>> m.connect(r.n, c.p)
+    """
+
+    def __init__(self, name: str = "model", *, doc: str = ""):
+        super().__init__(doc=doc)
+        self._name = name
+        self._connects: list[Connect] = []
+        self._extra: list = []
+
+    def add(self, name: str, element: Element) -> Element:
+        """Add a sub-component (or port) under ``name`` and return it."""
+        if not name.isidentifier():
+            raise ModelError(f"System '{self._name}': '{name}' is not a valid name; use "
+                             "letters, digits and underscores.")
+        if name in self._children or name in type(self)._declarations:
+            raise ModelError(f"System '{self._name}': a part named '{name}' exists already.")
+        if not isinstance(element, Element):
+            raise TypeError(f"System.add: expected a Component, got {element!r}.")
+        if element._parent is not None:
+            raise ModelError(f"System '{self._name}': {element!r} belongs to "
+                             f"'{element._parent.path or element._parent._name}' already.")
+        return self._adopt(name, element)
+
+    def connect(self, *ports) -> None:
+        """Connect two or more ports (or a signal output to inputs)."""
+        if len(ports) < 2:
+            raise ModelError(f"System '{self._name}': connect needs at least two ports.")
+        self._connects.append(Connect(ports))
+
+    def add_equation(self, equation) -> None:
+        """Add an equation written with ``==`` over the parts' variables."""
+        self._extra.append(equation)
+
+    def equations(self):
+        return list(self._connects) + [eq() if callable(eq) else eq for eq in self._extra]

@@ -1,0 +1,156 @@
+"""Declarations: what a component or connector class says it has.
+
+Each declaration is a descriptor. Outside compilation it describes (unit, default, doc);
+while the model compiles, reading it on an instance gives the CasADi symbol bound to that
+instance's variable or parameter, so equations read like the textbook: ``self.v == self.R *
+self.i``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+from mechatron.errors import ModelError
+from mechatron.units import check_unit
+
+__all__ = ["Parameter", "Variable", "Across", "Through", "Input", "Output", "Start",
+           "PRIORITIES"]
+
+PRIORITIES = ("high", "low", "none")
+_order = itertools.count()
+
+
+@dataclass(frozen=True)
+class Start:
+    """A start value with an initialization priority, Simscape's variable target.
+
+    ``high`` targets are met exactly (an error if they conflict), ``low`` ones as closely
+    as the constraints allow, ``none`` is only a guess for the initial solve.
+    """
+
+    value: float
+    priority: str = "high"
+
+    def __post_init__(self):
+        if self.priority not in PRIORITIES:
+            raise ValueError(f"Start: priority must be one of {PRIORITIES}, "
+                             f"got {self.priority!r}.")
+
+
+class Declaration:
+    """Base of all declarations: a unit, a one-line description, a name and an order."""
+
+    kind = "declaration"
+
+    def __init__(self, unit: str = "1", *, doc: str = ""):
+        self.unit = check_unit(unit, "declaration")
+        self.doc = doc
+        self.name = ""
+        self.order = next(_order)
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        return obj._symbol(self.name)
+
+    def __set__(self, obj, value):
+        raise AttributeError(f"'{type(obj).__name__}.{self.name}' is a {self.kind}; set it "
+                             f"with the constructor, e.g. {type(obj).__name__}"
+                             f"({self.name}=...).")
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.unit!r}, doc={self.doc!r})"
+
+
+class Parameter(Declaration):
+    """A parameter: a value fixed during a simulation, tunable between runs.
+
+    Parameters
+    ----------
+    unit : str
+        SI unit of the value, e.g. ``"Ohm"``.
+    default : float or str, optional
+        Default value (a number in ``unit`` or a quantity string). No default means the
+        user must give one.
+    min, max : float, optional
+        Inclusive bounds, checked when the model is compiled.
+    doc : str
+        One-line description.
+    """
+
+    kind = "parameter"
+
+    def __init__(self, unit: str = "1", default=None, *, min: float | None = None,
+                 max: float | None = None, doc: str = ""):
+        super().__init__(unit, doc=doc)
+        self.default = default
+        self.min = min
+        self.max = max
+
+
+class Variable(Declaration):
+    """An unknown of the component's equations.
+
+    Parameters
+    ----------
+    unit : str
+        SI unit.
+    start : float, optional
+        Start value (initial value for a state, initial guess otherwise).
+    priority : {"high", "low", "none"}
+        How strongly initialization must meet ``start`` (Simscape's variable priority).
+        Defaults to ``"none"``; a start value given by the user on an instance is ``high``.
+    doc : str
+        One-line description.
+    """
+
+    kind = "variable"
+
+    def __init__(self, unit: str = "1", *, start: float | None = None,
+                 priority: str = "none", doc: str = ""):
+        super().__init__(unit, doc=doc)
+        if priority not in PRIORITIES:
+            raise ValueError(f"Variable: priority must be one of {PRIORITIES}, "
+                             f"got {priority!r}.")
+        self.start = start
+        self.priority = priority
+
+
+class Across(Variable):
+    """The across variable of a connector (equal at all connected ports)."""
+
+    kind = "across variable"
+
+    def __init__(self, unit: str = "1", *, doc: str = "", hint: str = "", **kw):
+        super().__init__(unit, doc=doc, **kw)
+        self.hint = hint
+
+
+class Through(Variable):
+    """The through variable of a connector (sums to zero over connected ports).
+
+    Positive when it flows into the component at this port.
+    """
+
+    kind = "through variable"
+
+
+class Input(Variable):
+    """A causal signal input port (Simulink style). Connect an :class:`Output` to it."""
+
+    kind = "signal input"
+
+
+class Output(Variable):
+    """A causal signal output port, defined by the component's equations."""
+
+    kind = "signal output"
+
+
+def check_symbolic(obj, name):
+    raise ModelError(f"{obj!r}: {name} has no symbol outside compilation. Read variables "
+                     "in equations(); read values from a SimResult.")

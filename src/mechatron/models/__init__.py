@@ -1,0 +1,11 @@
+"""The database of mechatronic models (DESIGN.md §3).
+
+``list()`` gives every entry; ``get(name)`` one :class:`ModelEntry` with ``build``,
+``experiment``, ``parameters`` (units, defaults, provenance), ``outputs``, ``variants`` and
+``expected`` values.
+"""
+
+from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
+from mechatron.models.registry import get, list, register  # noqa: A004
+
+__all__ = ["ModelEntry", "Experiment", "ParameterInfo", "get", "list", "register"]

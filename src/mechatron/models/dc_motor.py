@@ -1,0 +1,97 @@
+"""The brush DC motor of the seed (its table 6-1, calculated values), in two variants.
+
+Armature: ``L di/dt = V - R i - k w``; rotor: ``J dw/dt = k i - B w``. A voltage step of
+``V`` at ``t = 0``. The analytic final speed is ``k V / (R B + k^2)``.
+"""
+
+from __future__ import annotations
+
+import mechatron as mt
+from mechatron.library import electrical as el
+from mechatron.library import electromechanical as em
+from mechatron.library import rotational as rot
+from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
+from mechatron.models.registry import register
+
+SEED = "seed table 6-1, calculated"
+
+
+class DCMotorAcausal(mt.Component):
+    """DC motor as a physical network: source, resistor, inductor, EMF, inertia, damper."""
+
+    source = el.DCVoltageSource()
+    resistor = el.Resistor()
+    inductor = el.Inductor()
+    emf = em.RotationalEMF()
+    inertia = rot.Inertia()
+    damper = rot.RotationalDamper()
+    ground = el.ElectricalReference()
+    fixed = rot.RotationalReference()
+
+    def equations(self):
+        return [mt.connect(self.source.p, self.resistor.p),
+                mt.connect(self.resistor.n, self.inductor.p),
+                mt.connect(self.inductor.n, self.emf.p),
+                mt.connect(self.emf.n, self.source.n, self.ground.port),
+                mt.connect(self.emf.A, self.inertia.port, self.damper.A),
+                mt.connect(self.emf.B, self.damper.B, self.fixed.port)]
+
+
+class DCMotorODE(mt.Component):
+    """DC motor as a user-written set of ODEs (the Simscape-language equivalent)."""
+
+    V = mt.Parameter("V", default=19.2, doc="Supply voltage")
+    R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
+    L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
+    k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
+    J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
+    B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Viscous friction")
+    i = mt.Variable("A", start=0.0, doc="Armature current")
+    w = mt.Variable("rad/s", start=0.0, doc="Rotor speed")
+
+    def equations(self):
+        return [self.L * mt.der(self.i) == self.V - self.R * self.i - self.k * self.w,
+                self.J * mt.der(self.w) == self.k * self.i - self.B * self.w]
+
+
+def _acausal(V, R, L, k, J, B):
+    m = DCMotorAcausal(
+        doc="DC motor, acausal network")
+    m._name = "dc_motor"
+    m.source._values["V"] = V
+    m.resistor._values["R"] = R
+    m.inductor._values["L"] = L
+    m.emf._values["k"] = k
+    m.inertia._values["J"] = J
+    m.damper._values["D"] = B
+    return m
+
+
+def _ode(V, R, L, k, J, B):
+    m = DCMotorODE(V=V, R=R, L=L, k=k, J=J, B=B)
+    m._name = "dc_motor"
+    return m
+
+
+ENTRY = register(ModelEntry(
+    name="dc_motor",
+    description=("Brush DC motor under a voltage step: armature R-L circuit, back EMF and "
+                 "torque constant k, rotor inertia J with viscous friction B."),
+    parameters={
+        "V": ParameterInfo("V", 19.2, "Supply voltage step at t = 0", "seed, test bench"),
+        "R": ParameterInfo("Ohm", 7.1, "Armature resistance", SEED),
+        "L": ParameterInfo("H", 3.408e-4, "Armature inductance", SEED),
+        "k": ParameterInfo("V*s/rad", 0.151, "Motor constant (torque and back EMF)", SEED),
+        "J": ParameterInfo("kg*m^2", 4.8e-6, "Rotor inertia", SEED),
+        "B": ParameterInfo("N*m*s/rad", 1.236e-4, "Viscous friction coefficient", SEED),
+    },
+    variants={"acausal": _acausal, "ode": _ode},
+    outputs={"acausal": {"w": "inertia.w", "i": "inductor.i"},
+             "ode": {"w": "w", "i": "i"}},
+    output_units={"w": "rad/s", "i": "A"},
+    experiment=Experiment(t_stop=0.5, rtol=1e-8, atol=1e-10),
+    expected={"w": 0.151 * 19.2 / (7.1 * 1.236e-4 + 0.151 ** 2),
+              "i": 1.236e-4 * 19.2 / (7.1 * 1.236e-4 + 0.151 ** 2)},
+    expected_tolerance=1e-5,
+    tags=("seed", "electromechanical", "motor"),
+))

@@ -1,0 +1,55 @@
+"""The registry of database entries; third-party packages add entries through the
+``mechatron.models`` entry point group (each entry point loads a ModelEntry or a callable
+returning one or a list of them)."""
+
+from __future__ import annotations
+
+import builtins
+import difflib
+
+from mechatron.errors import ModelError
+from mechatron.models.entry import ModelEntry
+
+__all__ = ["register", "get", "list"]
+
+_REGISTRY: dict[str, ModelEntry] = {}
+_loaded = False
+
+
+def register(entry: ModelEntry) -> ModelEntry:
+    """Add an entry to the database (its name must be new)."""
+    if entry.name in _REGISTRY and _REGISTRY[entry.name] is not entry:
+        raise ModelError(f"model '{entry.name}' is registered already.")
+    _REGISTRY[entry.name] = entry
+    return entry
+
+
+def _load() -> None:
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True
+    from mechatron.models import dc_motor  # noqa: F401  (registers itself)
+    from importlib.metadata import entry_points
+    for ep in entry_points(group="mechatron.models"):
+        obj = ep.load()
+        obj = obj() if callable(obj) and not isinstance(obj, ModelEntry) else obj
+        for entry in (obj if isinstance(obj, (builtins.list, tuple)) else [obj]):
+            register(entry)
+
+
+def list() -> builtins.list[ModelEntry]:  # noqa: A001  (public name fixed by DESIGN.md)
+    """Every entry of the database, sorted by name."""
+    _load()
+    return [_REGISTRY[k] for k in sorted(_REGISTRY)]
+
+
+def get(name: str) -> ModelEntry:
+    """The entry called ``name``."""
+    _load()
+    if name not in _REGISTRY:
+        close = difflib.get_close_matches(name, _REGISTRY, 3)
+        raise ModelError(f"no model '{name}' in the database"
+                         + (f"; did you mean {', '.join(close)}?" if close else ".")
+                         + " List them with `mechatron models`.", path=name)
+    return _REGISTRY[name]

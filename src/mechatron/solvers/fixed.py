@@ -1,0 +1,160 @@
+"""Fixed-step solvers: one CasADi step function per method (DESIGN.md §2).
+
+``step(X, u, p, t) -> (X_next, y)`` advances the integration state by one step ``h`` and
+returns every logged variable at the new point. Desktop simulation runs it with
+``mapaccum`` (native loop, no Python per step); the C generator emits the same function,
+so desktop and generated code agree to rounding.
+
+Methods are data: explicit ones are Butcher tableaus, implicit ones take a fixed number of
+Newton iterations (a fixed cost per step, as Simscape's local solvers). Modes of relations
+are updated at the end of each step from the sign of their distance (no event location,
+as in any real-time solver). Algebraic unknowns, where a nonlinear loop left some, are
+solved by a fixed number of Newton iterations from the previous step's values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from mechatron.compiler.compiled import CompiledModel
+from mechatron.errors import SimulationError
+
+__all__ = ["METHODS", "ExplicitMethod", "ImplicitMethod", "make_step", "integrate_fixed"]
+
+
+@dataclass(frozen=True)
+class ExplicitMethod:
+    """An explicit Runge-Kutta method given by its Butcher tableau."""
+
+    name: str
+    a: tuple[tuple[float, ...], ...]
+    b: tuple[float, ...]
+    c: tuple[float, ...]
+    order: int
+
+
+@dataclass(frozen=True)
+class ImplicitMethod:
+    """A one-step implicit method ``x1 = x0 + h*((1-theta) f(x0) + theta f(x1))`` solved
+    by a fixed number of Newton iterations from an explicit Euler predictor."""
+
+    name: str
+    theta: float
+    order: int
+
+
+METHODS = {
+    "euler": ExplicitMethod("euler", ((),), (1.0,), (0.0,), 1),
+    "heun": ExplicitMethod("heun", ((), (1.0,)), (0.5, 0.5), (0.0, 1.0), 2),
+    "rk4": ExplicitMethod("rk4", ((), (0.5,), (0.0, 0.5), (0.0, 0.0, 1.0)),
+                          (1 / 6, 1 / 3, 1 / 3, 1 / 6), (0.0, 0.5, 0.5, 1.0), 4),
+    "backward_euler": ImplicitMethod("backward_euler", 1.0, 1),
+    "trapezoidal": ImplicitMethod("trapezoidal", 0.5, 2),
+}
+
+
+def _newton_z(cm: CompiledModel, t, X, z, p, iterations: int):
+    if cm.nz == 0:
+        return z
+    zs = ca.SX.sym("zs", cm.nz)
+    gs = cm.f_alg(t, X, zs, p)
+    jac = ca.Function("jz", [zs], [ca.jacobian(gs, zs), gs])
+    for _ in range(iterations):
+        jz, gz = jac(z)
+        z = z - ca.solve(jz, gz)
+    return z
+
+
+def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) -> ca.Function:
+    """The step function of ``method`` with step ``dt`` (cached on the model)."""
+    if method not in METHODS:
+        raise SimulationError(f"unknown fixed-step solver '{method}'. Choose one of "
+                              f"{', '.join(METHODS)}.")
+    if not dt or dt <= 0:
+        raise SimulationError(f"solver '{method}' needs a step size dt > 0, got {dt!r}.")
+    key = ("step", method, float(dt), int(iterations))
+    if key in cm._cache:
+        return cm._cache[key]
+    m = METHODS[method]
+    nx, nr, nz = cm.nx, cm.nr, cm.nz
+    Xa = ca.SX.sym("x", cm.nX + nz)        # [x; modes; counters; t_event; z guess]
+    u = ca.SX.sym("u", 0)
+    p = ca.SX.sym("p", cm.p0.size)
+    t = ca.SX.sym("t")
+    h = float(dt)
+    x0 = Xa[:nx]
+    rest = Xa[nx:cm.nX]
+    zg = Xa[cm.nX:]
+
+    def f(tt, xx, zz):
+        X = ca.vertcat(xx, rest)
+        zz = _newton_z(cm, tt, X, zz, p, iterations)
+        return cm.f_ode(tt, X, zz, p)[:nx], zz
+
+    if isinstance(m, ExplicitMethod):
+        ks = []
+        z = zg
+        for i, ci in enumerate(m.c):
+            xi = x0
+            for j, aij in enumerate(m.a[i]):
+                if aij:
+                    xi = xi + h * aij * ks[j]
+            k, z = f(t + ci * h, xi, z)
+            ks.append(k)
+        x1 = x0
+        for bi, k in zip(m.b, ks):
+            x1 = x1 + h * bi * k
+    else:
+        f0, z = f(t, x0, zg)
+        x1 = x0 + h * f0
+        xs = ca.SX.sym("xs", nx)
+        fs, _ = f(t + h, xs, z)
+        resid = xs - x0 - h * ((1 - m.theta) * f0 + m.theta * fs)
+        newton = ca.Function("newton", [xs], [ca.jacobian(resid, xs), resid])
+        for _ in range(max(1, iterations)):
+            jx, rx = newton(x1)
+            x1 = x1 - ca.solve(jx, rx)
+    z1 = _newton_z(cm, t + h, ca.vertcat(x1, rest), z if nz else zg, p, iterations) \
+        if nz else zg
+    modes, counters, tlast = rest[:nr], rest[nr:2 * nr], rest[2 * nr:]
+    if nr:
+        d = cm.f_dist(t + h, ca.vertcat(x1, rest), z1, p)
+        le = ca.DM([1.0 if op in ("<=", "sign") else 0.0 for _, op in cm.relations])
+        new = ca.vertcat(*[ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, 2 * le[k] - 1))
+                           for k in range(nr)])
+        changed = new != modes
+        counters = counters + changed
+        tlast = ca.vertcat(*[ca.if_else(changed[k], t + h, tlast[k]) for k in range(nr)])
+        modes = new
+    Xn = ca.vertcat(x1, modes, counters, tlast)
+    y = cm.f_out(t + h, Xn, z1, p)
+    step = ca.Function(f"step_{method}", [Xa, u, p, t], [ca.vertcat(Xn, z1), y],
+                       ["x", "u", "p", "t"], ["x_next", "y"])
+    cm._cache[key] = step
+    return step
+
+
+def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, z0, p, *,
+                    method: str, iterations: int = 3):
+    """Run ``make_step`` from ``t0`` to ``t_stop``; return ``(t, Y, X_final)``."""
+    n = int(round((t_stop - t0) / dt))
+    if n < 1:
+        raise SimulationError(f"t_stop - t0 = {t_stop - t0:g} s is shorter than one step "
+                              f"dt = {dt:g} s.")
+    step = make_step(cm, method, dt, iterations)
+    key = ("run", method, float(dt), int(iterations), n)
+    run = cm._cache.get(key)
+    if run is None:
+        run = cm._cache[key] = step.mapaccum("run", n)
+    times = t0 + dt * np.arange(n)
+    Xa0 = np.concatenate([X0, z0])
+    xs, ys = run(Xa0, ca.DM.zeros(0, n), np.repeat(p.reshape(-1, 1), n, axis=1),
+                 times.reshape(1, -1))
+    y0 = np.array(cm.f_out(t0, X0, z0, p), dtype=float).reshape(-1, 1)
+    Y = np.hstack([y0, np.array(ys, dtype=float).reshape(-1, n)])
+    t = np.concatenate([[t0], t0 + dt * np.arange(1, n + 1)])
+    Xf = np.array(xs, dtype=float)[:, -1]
+    return t, Y, Xf

@@ -1,0 +1,142 @@
+"""``mt.simulate``: compile if needed, initialize, integrate, log every variable."""
+
+from __future__ import annotations
+
+import time as _time
+
+import numpy as np
+
+from mechatron.compiler.compiled import CompiledModel
+from mechatron.compiler.pipeline import compile_model
+from mechatron.core.component import Component
+from mechatron.errors import SimulationError
+from mechatron.results import SimResult, SolverStats
+from mechatron.solvers.fixed import METHODS, integrate_fixed
+from mechatron.solvers.initial import initialize
+from mechatron.solvers.variable import PLUGINS, integrate_variable
+
+__all__ = ["simulate", "SOLVERS"]
+
+SOLVERS = ("auto",) + tuple(PLUGINS) + tuple(METHODS)
+DEFAULT_POINTS = 1001
+
+
+def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = None,
+             params: dict | None = None, inputs=None, rtol: float = 1e-6,
+             atol: float = 1e-8, t_out=None, t0: float = 0.0, iterations: int = 3,
+             max_step: float | None = None) -> SimResult:
+    """Simulate a model and log every variable.
+
+    Parameters
+    ----------
+    model : Component or CompiledModel
+        A model instance (compiled here) or a compiled model (reused, no recompilation).
+    t_stop : float
+        End time in s.
+    solver : str
+        ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs), ``"cvodes"``, ``"idas"``, or a
+        fixed-step method: ``"euler"``, ``"heun"``, ``"rk4"``, ``"backward_euler"``,
+        ``"trapezoidal"``.
+    dt : float, optional
+        Step size of a fixed-step solver (required for those).
+    params : dict, optional
+        Parameter values by instance path (numbers in SI or quantity strings).
+    rtol, atol : float
+        Tolerances of the variable-step solvers.
+    t_out : array_like, optional
+        Output times of a variable-step run (default: 1001 points); fixed-step runs log
+        every step.
+    iterations : int
+        Newton iterations per step of the implicit fixed-step methods.
+    max_step : float, optional
+        Largest step of the variable-step solvers.
+    """
+    if inputs is not None:
+        raise SimulationError("simulate(inputs=...): external inputs are not supported "
+                              "yet; drive the model with source blocks (blocks.Step, "
+                              "blocks.Sine, ...).")
+    if solver not in SOLVERS:
+        raise SimulationError(f"unknown solver '{solver}'. Choose one of "
+                              f"{', '.join(SOLVERS)}.")
+    compile_time = None
+    if isinstance(model, Component):
+        t_c = _time.perf_counter()
+        cm = compile_model(model)
+        compile_time = _time.perf_counter() - t_c
+    elif isinstance(model, CompiledModel):
+        cm = model
+    else:
+        raise TypeError(f"simulate: expected a Component or CompiledModel, got {model!r}.")
+    if not np.isfinite(t_stop) or t_stop <= t0:
+        raise SimulationError(f"model '{cm.name}': t_stop must be a number > t0 = {t0:g}, "
+                              f"got {t_stop!r}.")
+    p = cm.parameter_vector(params)
+    clock = _time.perf_counter()
+    X0, z0, init_report = initialize(cm, p, t0)
+    if solver in METHODS:
+        t, Y, Xf = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p, method=solver,
+                                   iterations=iterations)
+        if t_out is not None:
+            t_req = np.asarray(t_out, dtype=float)
+            Y = np.vstack([np.interp(t_req, t, row) for row in Y])
+            t = t_req
+        n = len(t) - 1
+        stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
+                            rhs_evals=n * _stages(solver), jac_evals=0)
+    else:
+        grid = (np.linspace(t0, t_stop, DEFAULT_POINTS) if t_out is None
+                else np.asarray(t_out, dtype=float))
+        if grid[0] != t0:
+            grid = np.concatenate([[t0], grid])
+        plugin = "cvodes" if solver == "auto" else solver
+        X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
+                                            atol=atol, max_step=max_step)
+        Y = np.array(cm.f_out.map(grid.size)(grid.reshape(1, -1), X, Z,
+                                             np.repeat(p.reshape(-1, 1), grid.size, 1)),
+                     dtype=float).reshape(len(cm.names), grid.size)
+        t, Xf = grid, X[:, -1]
+        if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
+            t, Y = t[1:], Y[:, 1:]
+        stats = SolverStats(solver=used, steps=int(st.get("nsteps", 0)),
+                            rejected_steps=int(st.get("netfails", 0)),
+                            rhs_evals=int(st.get("nfevals", 0)),
+                            jac_evals=int(st.get("n_call_jacF", st.get("nlinsetups", 0))))
+    stats.events = _events(cm, Xf)
+    stats.wall_time = _time.perf_counter() - clock
+    stats.compile_time = compile_time
+    if not np.all(np.isfinite(Y[:, -1])):
+        bad = [cm.names[i] for i in np.nonzero(~np.isfinite(Y[:, -1]))[0][:5]]
+        raise SimulationError(f"model '{cm.name}': the solution is not finite at "
+                              f"t = {t[-1]:g} s ({', '.join(bad)}). The step may be too "
+                              "large for a fixed-step solver, or the model unstable.",
+                              path=cm.name, variables=bad)
+    res = SimResult(t, Y, cm.names, cm.units, stats=stats, model_name=cm.name,
+                    descriptions={n: d for n, d in zip(cm.names, cm.docs) if d})
+    res.initialization = init_report
+    res.event_times = _event_times(cm, Xf)
+    return res
+
+
+def _stages(method: str) -> int:
+    m = METHODS[method]
+    return len(m.c) if hasattr(m, "c") else 2
+
+
+def _events(cm: CompiledModel, Xf: np.ndarray) -> dict[str, int]:
+    counts: dict[str, int] = {}
+    nx, nr = cm.nx, cm.nr
+    for k, (owner, _) in enumerate(cm.relations):
+        n = int(round(Xf[nx + nr + k]))
+        if n:
+            counts[owner] = counts.get(owner, 0) + n
+    return counts
+
+
+def _event_times(cm: CompiledModel, Xf: np.ndarray) -> dict[str, float]:
+    """Time of the last event of each component that had one."""
+    out: dict[str, float] = {}
+    nx, nr = cm.nx, cm.nr
+    for k, (owner, _) in enumerate(cm.relations):
+        if Xf[nx + nr + k] > 0:
+            out[owner] = max(out.get(owner, -np.inf), float(Xf[nx + 2 * nr + k]))
+    return out

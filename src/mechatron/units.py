@@ -1,0 +1,83 @@
+"""Unit handling: user values with units converted to SI floats at build time.
+
+Mechatron keeps runtime values as SI floats. Users may give a parameter as a number (taken
+as SI), a string such as ``"340 uH"`` or ``"1500 rpm"``, or a pint quantity; the value is
+converted to the declared unit of the parameter, and a value of the wrong dimension is an
+error naming the parameter.
+"""
+
+from __future__ import annotations
+
+import functools
+import numbers
+
+import pint
+
+from mechatron.errors import UnitError
+
+__all__ = ["ureg", "to_si", "check_unit", "dimensionality"]
+
+ureg = pint.UnitRegistry()
+ureg.define("@alias ohm = Ohm")  # the capitalised spelling engineers write
+_Q = ureg.Quantity
+
+
+@functools.lru_cache(maxsize=None)
+def _unit(unit: str) -> pint.Unit:
+    return ureg.Unit(unit or "dimensionless")
+
+
+def check_unit(unit: str, where: str = "") -> str:
+    """Return ``unit`` if pint understands it; raise :class:`UnitError` otherwise."""
+    try:
+        _unit(unit)
+    except Exception as exc:  # pint raises several types for bad unit strings
+        raise UnitError(f"{where}: unknown unit {unit!r} ({exc}). "
+                        "Use pint's notation, e.g. 'N*m/(rad/s)'.", path=where) from None
+    return unit
+
+
+def dimensionality(unit: str):
+    """The pint dimensionality of a unit string (e.g. ``[length] / [time]``)."""
+    return _unit(unit).dimensionality
+
+
+def to_si(value, unit: str, where: str) -> float:
+    """Convert a user value to a float in the SI base of ``unit``.
+
+    Parameters
+    ----------
+    value : float, str or pint.Quantity
+        A plain number is taken to be in ``unit`` already (Mechatron declares SI units), a
+        string is parsed by pint (``"340 uH"``), a quantity is converted.
+    unit : str
+        The declared unit of the parameter, e.g. ``"H"``.
+    where : str
+        Who owns the value, used in messages, e.g. ``"motor.L"``.
+    """
+    if isinstance(value, bool):
+        return float(value)
+    if isinstance(value, numbers.Real):
+        return float(value)
+    if isinstance(value, str):
+        try:
+            value = _Q(value)
+        except Exception:
+            raise UnitError(f"{where}: cannot read {value!r} as a quantity. "
+                            f"Write a number and a unit, e.g. '1.5 {unit or ''}'.".rstrip(),
+                            path=where) from None
+    if isinstance(value, pint.Quantity):
+        target = _unit(unit)
+        if value.dimensionality != target.dimensionality:
+            raise UnitError(
+                f"{where}: expected a value in {unit or 'dimensionless'} "
+                f"({_describe(target.dimensionality)}), got {value:~} "
+                f"({_describe(value.dimensionality)}).", path=where)
+        return float(value.to(target).magnitude)
+    raise UnitError(f"{where}: expected a number or a quantity such as '1 {unit}', "
+                    f"got {type(value).__name__} {value!r}.", path=where)
+
+
+def _describe(dim) -> str:
+    text = str(dim)
+    return "dimensionless" if text in ("", "dimensionless") else text

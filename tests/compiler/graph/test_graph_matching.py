@@ -1,0 +1,111 @@
+"""Tests of `maximum_matching`."""
+
+import random
+
+import numpy as np
+import pytest
+
+from mechatron.compiler.graph import Matching, maximum_matching
+
+
+def assert_valid(matching, n_var, adj, allowed=None):
+    """Pairs are incidences, both directions agree, only allowed variables used."""
+    assert len(matching.eq_to_var) == len(adj)
+    assert len(matching.var_to_eq) == n_var
+    for e, v in enumerate(matching.eq_to_var):
+        if v != -1:
+            assert v in adj[e]
+            assert matching.var_to_eq[v] == e
+            assert allowed is None or v in allowed
+    for v, e in enumerate(matching.var_to_eq):
+        if e != -1:
+            assert matching.eq_to_var[e] == v
+
+
+def reference_size(n_var, adj):
+    """Maximum matching size by simple recursive augmenting paths (small graphs)."""
+    var_to_eq = [-1] * n_var
+
+    def augment(e, seen):
+        for v in adj[e]:
+            if v not in seen:
+                seen.add(v)
+                if var_to_eq[v] == -1 or augment(var_to_eq[v], seen):
+                    var_to_eq[v] = e
+                    return True
+        return False
+
+    return sum(augment(e, set()) for e in range(len(adj)))
+
+
+def test_perfect_matching_needs_augmenting_path():
+    # Greedy pairs 0-0 first; equation 1 only has variable 0.
+    adj = [[0, 1], [0], [1, 2]]
+    m = maximum_matching(3, adj)
+    assert_valid(m, 3, adj)
+    assert m.eq_to_var == [1, 0, 2]
+    assert m.size == 3
+    assert m.unmatched_equations == []
+    assert m.unmatched_variables == []
+
+
+def test_imperfect_matching_reports_unmatched():
+    adj = [[0], [0], [1, 2]]
+    m = maximum_matching(3, adj)
+    assert_valid(m, 3, adj)
+    assert m.size == 2
+    assert m.unmatched_equations in ([0], [1])
+    assert m.unmatched_variables in ([1], [2])
+
+
+def test_empty_system():
+    m = maximum_matching(0, [])
+    assert m == Matching([], [])
+
+
+@pytest.mark.parametrize("allowed", [
+    [True, False, True],
+    np.array([1, 0, 1], dtype=bool),
+    {0, 2},
+    lambda v: v != 1,
+])
+def test_allowed_forms_exclude_variable(allowed):
+    adj = [[1, 0], [1, 2]]
+    m = maximum_matching(3, adj, allowed=allowed)
+    assert_valid(m, 3, adj, allowed={0, 2})
+    assert m.eq_to_var == [0, 2]
+    assert m.var_to_eq[1] == -1
+
+
+def test_allowed_wrong_length_raises():
+    with pytest.raises(ValueError, match="one entry per variable"):
+        maximum_matching(3, [[0]], allowed=[True])
+
+
+def test_adjacency_out_of_range_raises():
+    with pytest.raises(ValueError, match="variable 3, outside 0 .. 2"):
+        maximum_matching(3, [[0, 3]])
+
+
+def test_initial_matching_is_extended_not_modified():
+    adj = [[0, 1], [0], [1, 2]]
+    initial = Matching([0, -1, -1], [0, -1, -1])
+    m = maximum_matching(3, adj, initial=initial)
+    assert m.size == 3
+    assert initial.eq_to_var == [0, -1, -1]
+
+
+def test_invalid_initial_matching_raises():
+    adj = [[0, 1], [0], [1, 2]]
+    with pytest.raises(ValueError, match="equation 0 with variable 2"):
+        maximum_matching(3, adj, initial=Matching([2, -1, -1], [-1, -1, 0]))
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_random_graphs_reach_maximum_size(seed):
+    rng = random.Random(seed)
+    n_eq, n_var = rng.randint(1, 25), rng.randint(1, 25)
+    adj = [rng.sample(range(n_var), rng.randint(0, min(4, n_var))) for _ in range(n_eq)]
+    m = maximum_matching(n_var, adj)
+    assert_valid(m, n_var, adj)
+    assert m.size == reference_size(n_var, adj)
