@@ -20,7 +20,7 @@ from mechatron.units import to_si
 
 __all__ = ["CompiledModel"]
 
-_FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition")
+_FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition", "f_scales")
 
 
 @dataclass
@@ -64,6 +64,7 @@ class CompiledModel:
     f_zero: ca.Function = None
     f_dist: ca.Function = None
     f_transition: ca.Function = None
+    f_scales: ca.Function = None
     report: dict = field(default_factory=dict)
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 

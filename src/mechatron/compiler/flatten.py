@@ -61,6 +61,7 @@ class FlatModel:
     equations: list[FlatEquation] = field(default_factory=list)
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
     components: dict[str, str] = field(default_factory=dict)  # path -> class name
+    time_scales: list = field(default_factory=list)           # SX of parameters
 
     @property
     def time(self) -> ca.SX:
@@ -215,6 +216,8 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
             except Exception as exc:
                 raise ModelError(f"{el.describe()}: {klass.__name__}.equations() failed: "
                                  f"{type(exc).__name__}: {exc}", path=where) from exc
+            if klass is type(el):
+                flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
             for k, item in enumerate(_as_equations(items, where)):
                 if isinstance(item, Connect):
                     connects.append((item, where))

@@ -108,7 +108,10 @@ def compile_model(model: Component, *, name: str | None = None) -> CompiledModel
     f_out = ca.Function("out", args, [ca.vertcat(*outs) if outs else ca.SX(0, 1)], argn,
                         ["y"])
     dvec = ca.vertcat(*dist) if dist else ca.SX(0, 1)
-    f_dist = ca.Function("dist", args, [dvec], argn, ["d"])
+    # time derivative of the distances along the trajectory: decides a mode whose distance
+    # is exactly zero (a pulse starting at t = 0 rises; it is not "off")
+    ddot = ca.jacobian(dvec, t) + ca.jtimes(dvec, X, xdot) if nr else ca.SX(0, 1)
+    f_dist = ca.Function("dist", args, [dvec, ddot], argn, ["d", "d_dot"])
     f_zero = ca.Function("zero", args, [modes * dvec if nr else ca.SX(0, 1)], argn,
                          ["zero"])
     index = ca.SX.sym("index")
@@ -116,16 +119,17 @@ def compile_model(model: Component, *, name: str | None = None) -> CompiledModel
     flipped = modes * (1 - 2 * sel)
     # the event's relation flips; every other mode is re-read at the new point, so that
     # relations whose distance jumped at this event (e.g. after a reset) stay consistent
-    d_post = f_dist(t, ca.vertcat(x, flipped, counters, tlast), z, p)
-    le = [1.0 if r.op == "<=" else -1.0 for r in relations]
-    rule = ca.vertcat(*[ca.if_else(d_post[k] > 0, 1, ca.if_else(d_post[k] < 0, -1, le[k]))
-                        if r.op != "sign" else
-                        ca.if_else(d_post[k] >= 0, 1, -1)
-                        for k, r in enumerate(relations)]) if nr else ca.SX(0, 1)
+    d_post, d_dot = f_dist(t, ca.vertcat(x, flipped, counters, tlast), z, p)
+    rule = ca.vertcat(*[ca.if_else(d_post[k] > 0, 1, ca.if_else(
+        d_post[k] < 0, -1, ca.if_else(d_dot[k] > 0, 1, ca.if_else(
+            d_dot[k] < 0, -1, 1.0 if r.op != "<" else -1.0))))
+        for k, r in enumerate(relations)]) if nr else ca.SX(0, 1)
     new_modes = sel * flipped + (1 - sel) * rule
     post = ca.vertcat(x, new_modes, counters + sel, tlast + sel * (t - tlast))
     f_transition = ca.Function("transition", [index, t, X, z, p], [post, z],
                                ca.event_in()[:5], ["post_x", "post_z"])
+    scales = ca.vertcat(*flat.time_scales) if flat.time_scales else ca.SX(0, 1)
+    f_scales = ca.Function("scales", [p], [scales], ["p"], ["scales"])
     lap("lowering")
 
     state_starts = []
@@ -168,7 +172,8 @@ def compile_model(model: Component, *, name: str | None = None) -> CompiledModel
         relations=[(r.owner, r.op) for r in relations],
         x_start=np.array(state_starts, dtype=float), x_priority=state_prior,
         z_start=z_start, targets=targets, f_ode=f_ode, f_alg=f_alg, f_out=f_out,
-        f_zero=f_zero, f_dist=f_dist, f_transition=f_transition, report=report)
+        f_zero=f_zero, f_dist=f_dist, f_transition=f_transition, f_scales=f_scales,
+        report=report)
     timings["total"] = sum(timings.values())
     return cm
 

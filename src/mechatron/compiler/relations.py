@@ -75,6 +75,16 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
     return out, relations
 
 
+def _placeholder(relations: list[Relation], op: str, d: ca.SX, owner: str) -> ca.SX:
+    """The placeholder of this relation; one relation written twice is one mode."""
+    for r in relations:
+        if r.owner == owner and r.op == op and ca.is_equal(r.d, d, 20):
+            return r.placeholder
+    ph = ca.SX.sym(f"rel{len(relations)}[{owner}]")
+    relations.append(Relation(ph, op, d, owner))
+    return ph
+
+
 def _is_unary(op: int) -> bool:
     return op in _UNARY
 
@@ -106,9 +116,7 @@ def _rebuild(expr: ca.SX, owner: str, relations: list[Relation]) -> ca.SX:
                 d = work[i[0]]
             else:
                 d = work[i[1]] - work[i[0]]  # a < b  <=>  b - a > 0
-            ph = ca.SX.sym(f"rel{len(relations)}[{owner}]")
-            relations.append(Relation(ph, _REL_OPS[op], d, owner))
-            work[o[0]] = ph
+            work[o[0]] = _placeholder(relations, _REL_OPS[op], d, owner)
         elif op in _UNARY:
             work[o[0]] = ca.SX.unary(op, work[i[0]])
         else:

@@ -108,8 +108,8 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         jac = ca.jacobian(ca.vertcat(*[res[e] for e in eqs]),
                           ca.vertcat(*[var_syms[c] for c in candidates]))
         free = ca.symvar(jac)
-        fun = ca.Function("jac", free, [jac])
-        value = np.array(fun(*start_guess(free)) if free else fun(), dtype=float)
+        fun = ca.Function("jac_select", free, [jac])
+        value = np.array(fun.call(start_guess(free))[0], dtype=float)
         value = np.atleast_2d(value).reshape(len(eqs), len(candidates))
         from scipy.linalg import qr
         _, _, piv = qr(value, pivoting=True)

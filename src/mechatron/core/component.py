@@ -221,6 +221,12 @@ class Component(Element, partial=True):
         """Equations of this class (not of its parents), written with ``==``."""
         return []
 
+    def time_scales(self) -> list:
+        """Shortest intervals (expressions of parameters, s) this component switches on,
+        e.g. a pulse's on and off times. Variable-step solvers keep their steps below half
+        the smallest, so that no switching interval can be stepped over unseen."""
+        return []
+
     @property
     def components(self) -> dict[str, "Component"]:
         return {k: v for k, v in self._children.items() if isinstance(v, Component)}

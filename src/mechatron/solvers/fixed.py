@@ -121,7 +121,7 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
         if nz else zg
     modes, counters, tlast = rest[:nr], rest[nr:2 * nr], rest[2 * nr:]
     if nr:
-        d = cm.f_dist(t + h, ca.vertcat(x1, rest), z1, p)
+        d, _ = cm.f_dist(t + h, ca.vertcat(x1, rest), z1, p)
         le = ca.DM([1.0 if op in ("<=", "sign") else 0.0 for _, op in cm.relations])
         new = ca.vertcat(*[ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, 2 * le[k] - 1))
                            for k in range(nr)])

@@ -29,8 +29,10 @@ def initial_modes(cm: CompiledModel, t0: float, x: np.ndarray, z: np.ndarray,
     le = np.array([op in ("<=", "sign") for _, op in cm.relations])
     for _ in range(4):
         X = np.concatenate([x, modes, np.zeros(nr), np.full(nr, t0)])
-        d = np.array(cm.f_dist(t0, X, z, p), dtype=float).ravel()
-        new = np.where((d > 0) | ((d == 0) & le), 1.0, -1.0)
+        d, d_dot = (np.array(v, dtype=float).ravel() for v in cm.f_dist(t0, X, z, p))
+        # on the boundary, the direction of motion decides; at rest, the relation's op
+        at_zero = np.where(d_dot > 0, True, np.where(d_dot < 0, False, le))
+        new = np.where((d > 0) | ((d == 0) & at_zero), 1.0, -1.0)
         if np.array_equal(new, modes):
             break
         modes = new

@@ -34,7 +34,8 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     t_stop : float
         End time in s.
     solver : str
-        ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs), ``"cvodes"``, ``"idas"``, or a
+        ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs, Rosenbrock for models with
+        events), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``, or a
         fixed-step method: ``"euler"``, ``"heun"``, ``"rk4"``, ``"backward_euler"``,
         ``"trapezoidal"``.
     dt : float, optional
@@ -88,7 +89,12 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                 else np.asarray(t_out, dtype=float))
         if grid[0] != t0:
             grid = np.concatenate([[t0], grid])
-        plugin = "cvodes" if solver == "auto" else solver
+        plugin = solver
+        if max_step is None and cm.f_scales is not None and cm.f_scales.size1_out(0):
+            scales = np.array(cm.f_scales(p), dtype=float).ravel()
+            scales = scales[np.isfinite(scales) & (scales > 0)]
+            if scales.size:
+                max_step = 0.5 * float(scales.min())
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
                                             atol=atol, max_step=max_step)
         Y = np.array(cm.f_out.map(grid.size)(grid.reshape(1, -1), X, Z,
@@ -97,10 +103,11 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         t, Xf = grid, X[:, -1]
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
             t, Y = t[1:], Y[:, 1:]
-        stats = SolverStats(solver=used, steps=int(st.get("nsteps", 0)),
-                            rejected_steps=int(st.get("netfails", 0)),
-                            rhs_evals=int(st.get("nfevals", 0)),
-                            jac_evals=int(st.get("n_call_jacF", st.get("nlinsetups", 0))))
+        stats = SolverStats(solver=used,
+                            steps=int(st.get("n_steps", st.get("nsteps", 0))),
+                            rejected_steps=int(st.get("n_reject", st.get("netfails", 0))),
+                            rhs_evals=int(st.get("n_rhs", st.get("nfevals", 0))),
+                            jac_evals=int(st.get("n_jac", st.get("n_call_jacF", 0))))
     stats.events = _events(cm, Xf)
     stats.wall_time = _time.perf_counter() - clock
     stats.compile_time = compile_time

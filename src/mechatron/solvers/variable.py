@@ -9,6 +9,10 @@ parameters costs only the integration.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+
 import casadi as ca
 import numpy as np
 
@@ -17,7 +21,40 @@ from mechatron.errors import SimulationError
 
 __all__ = ["integrate_variable"]
 
-PLUGINS = {"cvodes": "cvodes", "bdf": "cvodes", "idas": "idas"}
+
+@contextlib.contextmanager
+def _quiet_stderr():
+    """Silence CasADi's C++ warning that event support is experimental (printed on the
+    process's stderr when an integrator with events is created)."""
+    try:
+        fd = sys.stderr.fileno()
+    except (AttributeError, ValueError, OSError):
+        yield
+        return
+    sys.stderr.flush()
+    saved = os.dup(fd)
+    with open(os.devnull, "w") as null:
+        os.dup2(null.fileno(), fd)
+        try:
+            yield
+        finally:
+            os.dup2(saved, fd)
+            os.close(saved)
+
+PLUGINS = {"cvodes": "cvodes", "bdf": "cvodes", "idas": "idas", "rosenbrock": "rosenbrock",
+           "rk45": "erk"}
+
+
+def choose_plugin(cm: CompiledModel, solver: str) -> str:
+    """``auto``: CVODES (BDF) for ODEs, IDAS for DAEs, and the L-stable Rosenbrock method
+    of order 5(4) when the model has events: it checks for zero crossings after every
+    step, while CasADi's SUNDIALS interfaces check only between output times."""
+    if solver == "auto":
+        return "rosenbrock" if cm.nr else ("idas" if cm.nz else "cvodes")
+    plugin = PLUGINS[solver]
+    if cm.nz and plugin in ("cvodes", "erk"):
+        return "idas" if plugin == "cvodes" else "rosenbrock"
+    return plugin
 
 
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
@@ -28,16 +65,22 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     if cached is not None:
         return cached
     t = ca.SX.sym("t")
-    X = ca.SX.sym("X", cm.nX)
+    # SUNDIALS needs at least one state: a model of algebraic equations only gets a
+    # constant dummy state (dropped again by integrate_variable)
+    pad = 1 if cm.nX == 0 else 0
+    Xi = ca.SX.sym("X", cm.nX + pad)
+    X = Xi[:cm.nX]
     z = ca.SX.sym("z", cm.nz)
     p = ca.SX.sym("p", cm.p0.size)
     u = ca.SX.sym("u", 0)
     empty = ca.SX(0, 1)
-    outs = [cm.f_ode(t, X, z, p), cm.f_alg(t, X, z, p) if cm.nz else empty, empty,
+    outs = [ca.vertcat(cm.f_ode(t, X, z, p), ca.SX.zeros(pad)),
+            cm.f_alg(t, X, z, p) if cm.nz else empty, empty,
             cm.f_zero(t, X, z, p) if cm.nr else empty]
-    dae = ca.Function("dae", [t, X, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
-    opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000,
-            "print_stats": False}
+    dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
+    opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
+    if plugin in ("cvodes", "idas"):
+        opts["print_stats"] = False
     if max_step:
         opts["max_step_size"] = max_step
     if cm.nr:
@@ -50,7 +93,8 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
         opts["max_event_iter"] = 100
     if plugin == "idas":
         opts["calc_ic"] = True
-    integ = ca.integrator(f"sim_{cm.name}", plugin, dae, float(grid[0]), grid, opts)
+    with _quiet_stderr():
+        integ = ca.integrator(f"sim_{cm.name}", plugin, dae, float(grid[0]), grid, opts)
     cm._cache[key] = integ
     return integ
 
@@ -59,15 +103,15 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
                        p: np.ndarray, *, solver: str, rtol: float, atol: float,
                        max_step: float | None = None):
     """Integrate on ``grid``; return ``(X, Z, stats)`` with one column per grid point."""
-    plugin = PLUGINS[solver]
-    if cm.nz and plugin == "cvodes":
-        plugin = "idas"
+    plugin = choose_plugin(cm, solver)
+    if cm.nX == 0 and cm.nz == 0:   # outputs are functions of time alone
+        return np.zeros((0, grid.size)), np.zeros((0, grid.size)), {}, "none"
     integ = _integrator(cm, plugin, grid, rtol, atol, max_step)
     try:
-        sol = integ(x0=X0, z0=z0, p=p)
+        sol = integ(x0=np.concatenate([X0, np.zeros(1 if cm.nX == 0 else 0)]), z0=z0, p=p)
     except RuntimeError as exc:
         raise SimulationError(_explain(cm, str(exc)), path=cm.name) from None
-    X = np.array(sol["xf"], dtype=float).reshape(cm.nX, grid.size)
+    X = np.array(sol["xf"], dtype=float)[:cm.nX].reshape(cm.nX, grid.size)
     Z = np.array(sol["zf"], dtype=float).reshape(cm.nz, grid.size)
     stats = integ.stats()
     return X, Z, stats, plugin

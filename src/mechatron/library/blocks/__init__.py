@@ -84,3 +84,6 @@ class Pulse(Component):
         on = ca.logic_and(ca.cos(self.width * ca.pi) < ca.cos(theta - ca.pi * self.width),
                           self.delay <= t)
         return [self.y == ca.if_else(on, self.amplitude, 0)]
+
+    def time_scales(self):
+        return [self.width * self.period, (1 - self.width) * self.period]

@@ -1,0 +1,5 @@
+"""Shared fixtures: small circuits and drives used across the test suite."""
+
+import matplotlib
+
+matplotlib.use("Agg")
