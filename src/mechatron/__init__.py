@@ -10,7 +10,7 @@ from mechatron.core import (Across, Component, Connector, Domain, Input, Output,
                             Start, System, Through, Variable, connect, der, if_else)
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers import simulate
-from mechatron import library, models  # noqa: E402  (subpackages of the public API)
+from mechatron import errors, library, models  # noqa: E402  (public subpackages)
 
 __version__ = "0.1.0"
 

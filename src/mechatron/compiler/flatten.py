@@ -117,6 +117,8 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
             el._syms = None
     if problems:
         kind = UnitError if all("expected a value in" in p for p in problems) else None
+        if kind is None and any(p.startswith("cannot connect") for p in problems):
+            kind = ConnectError
         if kind is None:
             kind = ParameterError if all(_is_value_problem(p) for p in problems) else ModelError
         raise kind(_summary(name, problems), problems=problems, path=name)
@@ -294,6 +296,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
                 sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
     uf = _UnionFind()
     ports: dict[int, object] = {}
+    tried: set[int] = set()   # ports of a failed connect: not reported again as unconnected
     for con, where in connects:
         resolved = []
         for p in con.ports:
@@ -307,6 +310,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
             msg = _compatible(a, b)
             if msg:
                 problems.append(msg)
+                tried.update((_key(a), _key(b)))
                 continue
             ka = _key(a)
             kb = _key(b)
@@ -315,7 +319,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
     groups: dict[int, list] = {}
     for k, p in ports.items():
         groups.setdefault(uf.find(k), []).append(p)
-    connected: set[int] = set(ports)
+    connected: set[int] = set(ports) | tried
     for group in groups.values():
         group.sort(key=_port_path)
         if isinstance(group[0], SignalRef):

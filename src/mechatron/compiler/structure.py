@@ -88,7 +88,10 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     _check_counts(name, res, orig, var_names, var_to_diff, adj, hints)
 
     # -- index reduction ------------------------------------------------------------------
-    ir = pantelides(len(var_syms), adj, var_to_diff)
+    try:
+        ir = pantelides(len(var_syms), adj, var_to_diff)
+    except StructuralError as exc:
+        _raise_singular(name, orig, var_names, exc, hints)
     differentiated = []
     while len(var_syms) < ir.n_var:
         v = len(var_syms)
@@ -217,6 +220,17 @@ def _check_counts(name, res, orig, var_names, var_to_diff, adj, hints) -> None:
         return
     m = maximum_matching(len(var_names), adj, allowed=highest)
     _raise_structural(name, res, orig, var_names, m, highest, hints)
+
+
+def _raise_singular(name, orig, var_names, exc, hints) -> None:
+    eqs = [orig[e] for e in exc.equations if isinstance(e, int) and e < len(orig)]
+    vs = [var_names[v] for v in exc.variables if isinstance(v, int) and v < len(var_names)]
+    raise StructuralError(
+        f"model '{name}': {len(eqs)} equations for {len(vs)} unknowns in a subsystem "
+        f"({', '.join(vs[:8])}). Potential extra equation(s): {'; '.join(eqs[:8])}. "
+        "Two components may fix the same quantity (e.g. two ideal voltage sources in "
+        "parallel); remove one or put a resistance between them.",
+        equations=eqs, variables=vs, path=name) from None
 
 
 def _raise_structural(name, res, orig, var_names, m, allowed, hints) -> None:

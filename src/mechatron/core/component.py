@@ -119,11 +119,13 @@ class Element:
                 raise TypeError(f"{type(self).__name__}({key}=...): a start value must be "
                                 f"a number, a quantity or mt.Start, got {value!r}.")
         else:
-            valid = [k for k, d in type(self)._declarations.items()
-                     if isinstance(d, Parameter)
-                     or (isinstance(d, Variable) and not isinstance(d, Input))]
+            decls = type(self)._declarations.items()
+            params = [k for k, d in decls if isinstance(d, Parameter)]
+            starts = [k for k, d in decls if isinstance(d, Variable)
+                      and not isinstance(d, Input)]
             raise TypeError(f"{type(self).__name__}() got an unexpected keyword '{key}'. "
-                            f"Valid names: {', '.join(valid) or '(none)'}.")
+                            f"Valid names: {', '.join(params) or '(no parameters)'}; "
+                            f"start values: {', '.join(starts) or '(none)'}.")
 
     def __deepcopy__(self, memo):
         clone = object.__new__(type(self))

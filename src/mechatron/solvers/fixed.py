@@ -56,14 +56,20 @@ METHODS = {
 }
 
 
+def _segment(v: ca.SX, a: int, b: int) -> ca.SX:
+    """``v[a:b]`` as a column; CasADi gives an empty slice the shape 1x0, which vertcat
+    would count as a row."""
+    return v[a:b] if b > a else ca.SX(0, 1)
+
+
 def _newton_z(cm: CompiledModel, t, X, z, p, iterations: int):
     if cm.nz == 0:
         return z
     zs = ca.SX.sym("zs", cm.nz)
     gs = cm.f_alg(t, X, zs, p)
-    jac = ca.Function("jz", [zs], [ca.jacobian(gs, zs), gs])
+    jac = ca.jacobian(gs, zs)
     for _ in range(iterations):
-        jz, gz = jac(z)
+        jz, gz = ca.substitute([jac, gs], [zs], [z])
         z = z - ca.solve(jz, gz)
     return z
 
@@ -85,14 +91,14 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
     p = ca.SX.sym("p", cm.p0.size)
     t = ca.SX.sym("t")
     h = float(dt)
-    x0 = Xa[:nx]
-    rest = Xa[nx:cm.nX]
-    zg = Xa[cm.nX:]
+    x0 = _segment(Xa, 0, nx)
+    rest = _segment(Xa, nx, cm.nX)
+    zg = _segment(Xa, cm.nX, cm.nX + nz)
 
     def f(tt, xx, zz):
         X = ca.vertcat(xx, rest)
         zz = _newton_z(cm, tt, X, zz, p, iterations)
-        return cm.f_ode(tt, X, zz, p)[:nx], zz
+        return _segment(cm.f_ode(tt, X, zz, p), 0, nx), zz
 
     if isinstance(m, ExplicitMethod):
         ks = []
@@ -113,13 +119,14 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
         xs = ca.SX.sym("xs", nx)
         fs, _ = f(t + h, xs, z)
         resid = xs - x0 - h * ((1 - m.theta) * f0 + m.theta * fs)
-        newton = ca.Function("newton", [xs], [ca.jacobian(resid, xs), resid])
+        jac = ca.jacobian(resid, xs)
         for _ in range(max(1, iterations)):
-            jx, rx = newton(x1)
+            jx, rx = ca.substitute([jac, resid], [xs], [x1])
             x1 = x1 - ca.solve(jx, rx)
     z1 = _newton_z(cm, t + h, ca.vertcat(x1, rest), z if nz else zg, p, iterations) \
         if nz else zg
-    modes, counters, tlast = rest[:nr], rest[nr:2 * nr], rest[2 * nr:]
+    modes, counters, tlast = (_segment(rest, 0, nr), _segment(rest, nr, 2 * nr),
+                              _segment(rest, 2 * nr, 3 * nr))
     if nr:
         d, _ = cm.f_dist(t + h, ca.vertcat(x1, rest), z1, p)
         le = ca.DM([1.0 if op in ("<=", "sign") else 0.0 for _, op in cm.relations])

@@ -69,7 +69,8 @@ def _entry(name, target, priority, value) -> dict:
 def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
     nx, nz, nr = cm.nx, cm.nz, cm.nr
     w = ca.SX.sym("w", nx + nz)
-    xs, zs = w[:nx], w[nx:]
+    xs = w[:nx] if nx else ca.SX(0, 1)
+    zs = w[nx:] if nz else ca.SX(0, 1)
     X = ca.vertcat(xs, ca.DM(modes), ca.DM.zeros(nr), ca.DM.ones(nr) * t0)
     y = cm.f_out(t0, X, zs, ca.DM(p))
     hard, hard_names, soft = [], [], []
@@ -97,12 +98,22 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
     f = ca.sumsqr(ca.vertcat(*soft)) if soft else ca.SX(0)
     w0 = np.concatenate([x0, z0])
     ng = g.numel()
-    solver = ca.nlpsol("init", "ipopt", {"x": w, "f": f, "g": g},
-                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-                        "ipopt.tol": 1e-12, "ipopt.constr_viol_tol": 1e-10})
-    sol = solver(x0=w0, lbg=0, ubg=0)
-    wv = np.array(sol["x"], dtype=float).ravel()
-    viol = float(np.max(np.abs(np.array(sol["g"], dtype=float)))) if ng else 0.0
+    g_fun = ca.Function("init_g", [w], [g])
+    if ng > nx + nz:
+        # more hard targets than unknowns: they can only hold if they agree; the least
+        # squares point tells, and the dependent rows name the conflict
+        from scipy.optimize import least_squares
+        jac_fun = ca.Function("init_jac", [w], [ca.jacobian(g, w)])
+        sol = least_squares(lambda v: np.array(g_fun(v), dtype=float).ravel(), w0,
+                            jac=lambda v: np.array(jac_fun(v), dtype=float), xtol=1e-14,
+                            ftol=1e-14, gtol=1e-14)
+        wv = sol.x
+    else:
+        solver = ca.nlpsol("init", "ipopt", {"x": w, "f": f, "g": g},
+                           {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                            "ipopt.tol": 1e-12, "ipopt.constr_viol_tol": 1e-10})
+        wv = np.array(solver(x0=w0, lbg=0, ubg=0)["x"], dtype=float).ravel()
+    viol = float(np.max(np.abs(np.array(g_fun(wv), dtype=float)))) if ng else 0.0
     if viol > 1e-7:
         _conflicts(cm, g, w, wv, hard_names, viol)
     return wv[:nx], wv[nx:]

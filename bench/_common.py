@@ -1,0 +1,139 @@
+"""Shared helpers of the benchmarks: import path, clocks, environment, JSON output.
+
+Benchmarks print timings; they never assert them. Progress goes to stderr so that stdout
+holds one JSON document only.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def ensure_importable() -> None:
+    """Make ``import mechatron`` work from a checkout without installing it."""
+    try:
+        import mechatron  # noqa: F401
+    except ImportError:
+        sys.path.insert(0, str(ROOT / "src"))
+
+
+ensure_importable()
+
+
+def log(*parts) -> None:
+    """Progress line on stderr."""
+    print("[bench]", *parts, file=sys.stderr, flush=True)
+
+
+def clock(fn, *args, **kwargs):
+    """``(result, seconds)`` of one call, wall-clock (``time.perf_counter``)."""
+    start = time.perf_counter()
+    out = fn(*args, **kwargs)
+    return out, time.perf_counter() - start
+
+
+def repeat(fn, n: int):
+    """Call ``fn()`` ``n`` times; return ``(last result, list of seconds)``."""
+    times, out = [], None
+    for _ in range(n):
+        out, dt = clock(fn)
+        times.append(dt)
+    return out, times
+
+
+def summary(times: list[float]) -> dict:
+    """Median, minimum and maximum of repeated timings, in s."""
+    return {"median_s": statistics.median(times), "min_s": min(times), "max_s": max(times),
+            "repeats": len(times)}
+
+
+def ratio(num: float | None, den: float | None) -> float | None:
+    if not num or not den:
+        return None
+    return num / den
+
+
+def growth_exponent(n1: float, t1: float | None, n2: float, t2: float | None) -> float | None:
+    """Exponent ``a`` of ``t ~ N**a`` fitted between two points."""
+    if not t1 or not t2 or t1 <= 0 or t2 <= 0:
+        return None
+    return math.log(t2 / t1) / math.log(n2 / n1)
+
+
+def environment() -> dict:
+    """Versions, machine and load: timings mean little without them."""
+    import casadi
+    import numpy
+    import scipy
+
+    import mechatron
+
+    try:
+        commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+                                capture_output=True, text=True, timeout=10).stdout.strip()
+        dirty = bool(subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain",
+                                     "src"], capture_output=True, text=True,
+                                    timeout=10).stdout.strip())
+    except (OSError, subprocess.SubprocessError):
+        commit, dirty = "", None
+    try:
+        load = os.getloadavg()
+    except OSError:
+        load = None
+    return {"mechatron": mechatron.__version__, "commit": commit, "src_modified": dirty,
+            "python": platform.python_version(), "casadi": casadi.__version__,
+            "numpy": numpy.__version__, "scipy": scipy.__version__,
+            "machine": platform.machine(), "system": platform.system(),
+            "cpus": os.cpu_count(), "load_average_1_5_15min": load,
+            "date": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+
+
+def _plain(obj):
+    """numpy scalars and arrays -> JSON types; round floats to 6 significant digits."""
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _plain(obj.tolist())
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        x = float(obj)
+        if not math.isfinite(x):
+            return None
+        return float(f"{x:.6g}")
+    return obj
+
+
+def dumps(result: dict) -> str:
+    return json.dumps(_plain(result), indent=2)
+
+
+def main(run, argv=None) -> None:
+    """Command line of a single benchmark module: ``--quick``, ``--out FILE``."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=(run.__doc__ or "").splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer repeats and sizes (under a minute)")
+    parser.add_argument("--out", help="also write the JSON document to this file")
+    args = parser.parse_args(argv)
+    doc = {"environment": environment(), "quick": args.quick, **run(quick=args.quick)}
+    text = dumps(doc)
+    print(text)
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(text + "\n")

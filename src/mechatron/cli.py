@@ -1,0 +1,893 @@
+"""The ``mechatron`` command (DESIGN.md §3).
+
+Subcommands
+-----------
+``models``
+    List the model database.
+``show NAME``
+    Description, parameters with units and provenance, variants, outputs, experiment and
+    expected values of one entry.
+``simulate NAME``
+    Build, compile and simulate one variant; print the final value of every output and the
+    solver profile; optionally save the log (CSV/Parquet) and a plot.
+``compare NAME``
+    Simulate every variant on the same output grid and print their largest deviations.
+``demo``
+    The showcase: :data:`DEMO_STEPS`, run in order.
+
+Every subcommand takes ``--help``; ``--json`` prints one JSON object on stdout instead of
+the human summary.
+
+Exit codes and errors
+---------------------
+0 on success; 2 for a usage error (argparse) or a problem with the user's input (any
+:class:`~mechatron.errors.MechatronError`, :class:`ValueError`, :class:`TypeError`, a
+missing file or directory), reported as one line ``error: <message>`` on stderr; 1 for an
+unexpected error (a bug), also one line, or for a demo whose checks failed. Set
+``MECHATRON_DEBUG=1`` to get the traceback as well.
+
+This module is the only one of Mechatron that prints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import json
+import math
+import os
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import mechatron as mt
+from mechatron.errors import MechatronError
+from mechatron.results import SUFFIXES as LOG_SUFFIXES
+from mechatron.results import SimResult
+from mechatron.solvers import METHODS as FIXED_STEP_METHODS
+
+__all__ = ["main", "build_parser", "DEMO_STEPS", "DemoStep", "DemoRun", "CommandError",
+           "EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE"]
+
+EXIT_OK = 0
+EXIT_FAILURE = 1     # an unexpected error, or a demo check that failed
+EXIT_USAGE = 2       # bad arguments or bad input (argparse's own code for usage errors)
+
+#: Points of the common output grid of ``compare``.
+COMPARE_POINTS = 1001
+
+#: Exceptions that mean "the input is wrong", not "Mechatron is wrong".
+USER_ERRORS = (MechatronError, ValueError, TypeError, FileNotFoundError, NotADirectoryError,
+               IsADirectoryError, PermissionError)
+
+
+class CommandError(MechatronError, ValueError):
+    """A command-line argument that cannot be used as given."""
+
+
+# ---------------------------------------------------------------------------- formatting
+def _emit(text: str = "") -> None:
+    print(text)
+
+
+def _emit_json(obj: Any) -> None:
+    print(json.dumps(_jsonable(obj), indent=2, allow_nan=False))
+
+
+def _jsonable(obj: Any) -> Any:
+    """``obj`` with NumPy scalars made plain and non-finite floats made ``null``."""
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def _one_line(text: str) -> str:
+    """Collapse a (possibly multi-line) message into one line."""
+    parts = [line.strip() for line in str(text).splitlines() if line.strip()]
+    return "; ".join(parts) if parts else "(no message)"
+
+
+def _num(x: float | None, digits: int = 10) -> str:
+    return "-" if x is None else f"{x:.{digits}g}"
+
+
+def _duration(seconds: float | None) -> str:
+    if seconds is None:
+        return "-"
+    if seconds < 1e-3:
+        return f"{seconds * 1e6:.0f} us"
+    if seconds < 1.0:
+        return f"{seconds * 1e3:.1f} ms"
+    return f"{seconds:.2f} s"
+
+
+def _table(headers: Sequence[str], rows: Iterable[Sequence[Any]], *, right: str = "",
+           indent: str = "  ") -> str:
+    """A plain text table; columns whose index is in ``right`` (e.g. ``"12"``) are
+    right-aligned."""
+    cells = [[str(c) for c in headers]] + [[str(c) for c in r] for r in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
+    lines = []
+    for row in cells:
+        parts = [c.rjust(w) if str(i) in right else c.ljust(w)
+                 for i, (c, w) in enumerate(zip(row, widths))]
+        lines.append(indent + "  ".join(parts).rstrip())
+    return "\n".join(lines)
+
+
+def _first_sentence(text: str, width: int = 78) -> str:
+    text = " ".join(text.split())
+    head = text.split(": ")[0].split(". ")[0].rstrip(".")
+    return head if len(head) <= width else head[: width - 3].rstrip() + "..."
+
+
+# ------------------------------------------------------------------------ shared helpers
+def _parse_sets(items: Sequence[str] | None, entry) -> dict[str, float | str]:
+    """``--set NAME=VALUE`` items as keyword arguments of ``entry.build``.
+
+    Plain numbers become floats (SI); anything else is passed on as a quantity string for
+    pint (``"340 uH"``), which ``entry.build`` converts or rejects with the parameter's name.
+    """
+    params: dict[str, float | str] = {}
+    for item in items or ():
+        key, sep, value = item.partition("=")
+        key, value = key.strip(), value.strip()
+        if not sep or not key or not value:
+            raise CommandError(f"--set {item!r}: expected NAME=VALUE, e.g. --set R=7.5 or "
+                               f"--set \"L=340 uH\".")
+        if key not in entry.parameters:
+            close = difflib.get_close_matches(key, list(entry.parameters), 3)
+            hint = f" Did you mean {', '.join(close)}?" if close else ""
+            raise CommandError(f"--set {key}: model '{entry.name}' has no parameter "
+                               f"'{key}'.{hint} Parameters: {', '.join(entry.parameters)} "
+                               f"(`mechatron show {entry.name}` describes them).")
+        if key in params:
+            raise CommandError(f"--set {key}: given twice ({params[key]!r} and {value!r}); "
+                               f"give each parameter once.")
+        params[key] = _number_or_quantity(key, value)
+    return params
+
+
+def _number_or_quantity(key: str, value: str) -> float | str:
+    try:
+        number = float(value)
+    except ValueError:
+        return value
+    if not math.isfinite(number):
+        raise CommandError(f"--set {key}: expected a finite value, got {value!r}.")
+    return number
+
+
+def _output_path(path: str | None, option: str, suffixes: Sequence[str]) -> Path | None:
+    """Check an output file before any work is done: suffix and existing directory."""
+    if path is None:
+        return None
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        got = repr(p.suffix) if p.suffix else "no suffix"
+        raise CommandError(f"{option} {path}: cannot write {got}; use one of "
+                           f"{', '.join(suffixes)}.")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise FileNotFoundError(f"{option} {path}: directory '{parent}' does not exist; "
+                                f"create it first.")
+    return p
+
+
+def _figure_suffixes() -> tuple[str, ...]:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    return tuple(f".{s}" for s in FigureCanvasAgg.get_supported_filetypes())
+
+
+def _new_figure(rows: int, *, width: float = 8.0, height: float = 2.4, sharex: bool = True):
+    from matplotlib.figure import Figure  # no pyplot: no global state, no window
+
+    fig = Figure(figsize=(width, 1.0 + height * rows), layout="constrained")
+    axes = list(fig.subplots(rows, 1, sharex=sharex, squeeze=False)[:, 0])
+    return fig, axes
+
+
+def _unit_label(unit: str) -> str:
+    return f"[{unit}]" if unit else "[1]"
+
+
+def _relative(deviation: float, scale: float) -> float:
+    """``deviation`` relative to ``scale`` (0 when both vanish, inf when only scale does)."""
+    if scale > 0:
+        return deviation / scale
+    return 0.0 if deviation == 0 else math.inf
+
+
+def _max_deviation(y: np.ndarray, y_ref: np.ndarray) -> tuple[float, float]:
+    """Largest absolute deviation, and the same relative to the largest ``|y_ref|``."""
+    dev = float(np.max(np.abs(y - y_ref))) if y.size else 0.0
+    return dev, _relative(dev, float(np.max(np.abs(y_ref))) if y_ref.size else 0.0)
+
+
+@dataclass(frozen=True)
+class _Settings:
+    """What a ``simulate``/``compare`` run uses: the experiment with the options applied."""
+
+    t_stop: float
+    solver: str
+    dt: float | None
+    rtol: float
+    atol: float
+
+    @classmethod
+    def resolve(cls, args: argparse.Namespace, entry) -> _Settings:
+        exp = entry.experiment
+        solver = getattr(args, "solver", None) or exp.solver
+        user_dt = getattr(args, "dt", None)
+        dt = user_dt if user_dt is not None else exp.dt
+        fixed = solver in FIXED_STEP_METHODS
+        if user_dt is not None and not fixed:
+            raise CommandError(f"--dt {user_dt:g}: solver '{solver}' chooses its own steps; "
+                               f"--dt needs a fixed-step --solver "
+                               f"({', '.join(FIXED_STEP_METHODS)}).")
+        if fixed and dt is None:
+            raise CommandError(f"--solver {solver}: a fixed-step method needs a step size; "
+                               f"give one with --dt, e.g. --dt 1e-5.")
+        if dt is not None and not (math.isfinite(dt) and dt > 0):
+            raise CommandError(f"--dt: the step size must be a number > 0, got {dt!r}.")
+        t_stop = getattr(args, "t_stop", None)
+        t_stop = exp.t_stop if t_stop is None else t_stop
+        rtol = getattr(args, "rtol", None)
+        atol = getattr(args, "atol", None)
+        for option, value in (("--rtol", rtol), ("--atol", atol)):
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise CommandError(f"{option}: a tolerance must be a number > 0, "
+                                   f"got {value!r}.")
+        return cls(t_stop=t_stop, solver=solver, dt=dt if fixed else None,
+                   rtol=exp.rtol if rtol is None else rtol,
+                   atol=exp.atol if atol is None else atol)
+
+    def describe(self) -> str:
+        if self.dt is not None:
+            return f"{self.solver}, dt {self.dt:g} s"
+        return f"{self.solver}, rtol {self.rtol:g}, atol {self.atol:g}"
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"t_stop": self.t_stop, "solver": self.solver, "dt": self.dt,
+                "rtol": self.rtol, "atol": self.atol}
+
+
+def _profile_rows(runs: dict[str, Any]) -> list[list[str]]:
+    """Rows of the solver profile table, one per run (name -> SolverStats)."""
+    rows = []
+    for name, st in runs.items():
+        events = sum(st.events.values()) if st.events else 0
+        rows.append([name, st.solver, f"{st.steps:,}", f"{st.rejected_steps:,}",
+                     f"{st.rhs_evals:,}", f"{st.jac_evals:,}", f"{events:,}",
+                     _duration(st.wall_time), _duration(st.compile_time)])
+    return rows
+
+
+_PROFILE_HEADERS = ["run", "solver", "steps", "rejected", "rhs evals", "jac evals", "events",
+                    "wall time", "compile time"]
+
+
+# ------------------------------------------------------------------------------ models
+def cmd_models(args: argparse.Namespace) -> int:
+    entries = mt.models.list()
+    if args.tag:
+        tag = args.tag.lower()
+        entries = [e for e in entries if tag in (t.lower() for t in e.tags)]
+        if not entries:
+            tags = sorted({t for e in mt.models.list() for t in e.tags})
+            raise CommandError(f"--tag {args.tag}: no model has this tag. Tags in the "
+                               f"database: {', '.join(tags) or '(none)'}.")
+    if args.json:
+        _emit_json({"models": [{"name": e.name, "variants": list(e.variants),
+                                "default_variant": e.default_variant,
+                                "description": e.description, "tags": list(e.tags)}
+                               for e in entries]})
+        return EXIT_OK
+    _emit(_table(["name", "variants", "description"],
+                 [[e.name, ", ".join(e.variants), _first_sentence(e.description, 64)]
+                  for e in entries], indent=""))
+    _emit(f"\n{len(entries)} model(s). `mechatron show NAME` describes one.")
+    return EXIT_OK
+
+
+# -------------------------------------------------------------------------------- show
+def _entry_dict(entry) -> dict[str, Any]:
+    exp = entry.experiment
+    return {
+        "name": entry.name,
+        "description": entry.description,
+        "tags": list(entry.tags),
+        "parameters": {k: {"default": p.default, "unit": p.unit, "description": p.doc,
+                           "source": p.source} for k, p in entry.parameters.items()},
+        "variants": list(entry.variants),
+        "default_variant": entry.default_variant,
+        "outputs": {label: {"unit": entry.output_units.get(label, ""),
+                            "paths": {v: paths.get(label) for v, paths in
+                                      entry.outputs.items()}}
+                    for label in _labels(entry)},
+        "experiment": {"t_stop": exp.t_stop, "solver": exp.solver, "rtol": exp.rtol,
+                       "atol": exp.atol, "dt": exp.dt},
+        "expected": dict(entry.expected),
+        "expected_tolerance": entry.expected_tolerance,
+    }
+
+
+def _labels(entry) -> list[str]:
+    """Output labels of every variant, in order of first appearance."""
+    labels: dict[str, None] = {}
+    for paths in entry.outputs.values():
+        labels.update(dict.fromkeys(paths))
+    return list(labels)
+
+
+def cmd_show(args: argparse.Namespace) -> int:
+    entry = mt.models.get(args.name)
+    if args.json:
+        _emit_json(_entry_dict(entry))
+        return EXIT_OK
+    exp = entry.experiment
+    _emit(f"{entry.name}: {' '.join(entry.description.split())}")
+    if entry.tags:
+        _emit(f"tags: {', '.join(entry.tags)}")
+    _emit("\nparameters (give them with `mechatron simulate "
+          f"{entry.name} --set NAME=VALUE`, units optional):")
+    _emit(_table(["name", "default", "unit", "description", "source"],
+                 [[k, _num(p.default, 6), p.unit, p.doc, p.source]
+                  for k, p in entry.parameters.items()], right="1"))
+    _emit("\nvariants: " + ", ".join(v + (" (default)" if v == entry.default_variant else "")
+                                     for v in entry.variants))
+    _emit("\noutputs (instance path in each variant):")
+    variants = list(entry.variants)
+    _emit(_table(["label", "unit", *variants],
+                 [[label, entry.output_units.get(label, ""),
+                   *[entry.outputs.get(v, {}).get(label, "-") for v in variants]]
+                  for label in _labels(entry)]))
+    fixed = f", dt {exp.dt:g} s" if exp.dt is not None else ""
+    _emit(f"\nexperiment: t_stop {exp.t_stop:g} s, solver {exp.solver}, rtol {exp.rtol:g}, "
+          f"atol {exp.atol:g}{fixed}")
+    if entry.expected:
+        _emit(f"\nexpected values at t_stop (tolerance {entry.expected_tolerance:g}):")
+        _emit(_table(["label", "value", "unit"],
+                     [[label, _num(value), entry.output_units.get(label, "")]
+                      for label, value in entry.expected.items()], right="1"))
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- simulate
+def cmd_simulate(args: argparse.Namespace) -> int:
+    entry = mt.models.get(args.name)
+    params = _parse_sets(args.set, entry)
+    variant = args.variant or entry.default_variant
+    settings = _Settings.resolve(args, entry)
+    out = _output_path(args.out, "--out", LOG_SUFFIXES)
+    plot = _output_path(args.plot, "--plot", _figure_suffixes()) if args.plot else None
+
+    model = entry.build(variant, **params)
+    res = mt.simulate(model, settings.t_stop, solver=settings.solver, dt=settings.dt,
+                      rtol=settings.rtol, atol=settings.atol)
+    outputs = dict(entry.output_paths(variant))
+    final = {label: res.final(path) for label, path in outputs.items()}
+    units = {label: entry.output_units.get(label, res.units.get(path, ""))
+             for label, path in outputs.items()}
+    # Reference values hold for the default experiment only.
+    default_run = not params and settings.t_stop == entry.experiment.t_stop
+    expected = {k: v for k, v in entry.expected.items() if k in final} if default_run else {}
+
+    files: dict[str, str] = {}
+    if out is not None:
+        files["out"] = str(res.save(out))
+    if plot is not None:
+        res.plot(*outputs.values(), path=plot)
+        files["plot"] = str(plot)
+
+    if args.json:
+        _emit_json({"model": entry.name, "variant": variant, **settings.as_dict(),
+                    "parameters": entry.values(**params), "set": params,
+                    "outputs": outputs, "units": units, "final": final,
+                    "expected": expected, "stats": res.stats.as_dict(), "files": files})
+        return EXIT_OK
+
+    changed = "".join(f", {k} = {v}" for k, v in params.items())
+    _emit(f"{entry.name} ({variant}{changed}): {settings.t_stop:g} s, "
+          f"{settings.describe()}")
+    _emit(f"\nfinal values at t = {res.t[-1]:g} s:")
+    headers = ["label", "value", "unit", "path"]
+    rows = [[label, _num(final[label]), units[label], path]
+            for label, path in outputs.items()]
+    if expected:
+        headers += ["expected", "rel. error"]
+        for row, label in zip(rows, outputs):
+            ref = expected.get(label)
+            row += ([_num(ref), f"{_relative(abs(final[label] - ref), abs(ref)):.1e}"]
+                    if ref is not None else ["-", "-"])
+    _emit(_table(headers, rows, right="1"))
+    _emit("\nsolver profile:")
+    _emit(_table(_PROFILE_HEADERS, _profile_rows({variant: res.stats}), right="2345678"))
+    for kind, path in files.items():
+        _emit(f"\nwrote {path} ({'simulation log' if kind == 'out' else 'plot'})")
+    return EXIT_OK
+
+
+# ----------------------------------------------------------------------------- compare
+def cmd_compare(args: argparse.Namespace) -> int:
+    entry = mt.models.get(args.name)
+    params = _parse_sets(args.set, entry)
+    settings = _Settings.resolve(args, entry)
+    out = _output_path(args.out, "--out", _figure_suffixes()) if args.out else None
+    grid = np.linspace(0.0, settings.t_stop, COMPARE_POINTS)
+
+    variants = list(entry.variants)
+    results: dict[str, SimResult] = {}
+    for v in variants:
+        results[v] = mt.simulate(entry.build(v, **params), settings.t_stop,
+                                 solver=settings.solver, dt=settings.dt,
+                                 rtol=settings.rtol, atol=settings.atol, t_out=grid)
+    ref = variants[0]
+    labels = list(entry.output_paths(ref))
+    deviations: dict[str, dict[str, dict[str, float]]] = {}
+    missing: dict[str, list[str]] = {}
+    for v in variants[1:]:
+        paths = entry.output_paths(v)
+        missing[v] = [label for label in labels if label not in paths]
+        deviations[v] = {}
+        for label in labels:
+            if label in paths:
+                y_ref = results[ref][entry.output_paths(ref)[label]]
+                dev, rel = _max_deviation(results[v][paths[label]], y_ref)
+                deviations[v][label] = {"max_abs": dev, "max_rel": rel}
+    final = {v: {label: results[v].final(path) for label, path in
+                 entry.output_paths(v).items()} for v in variants}
+
+    files: dict[str, str] = {}
+    if out is not None:
+        _compare_plot(entry, results, labels, out)
+        files["out"] = str(out)
+
+    if args.json:
+        _emit_json({"model": entry.name, "reference": ref, "variants": variants,
+                    **settings.as_dict(), "points": COMPARE_POINTS, "set": params,
+                    "deviations": deviations, "missing": {k: v for k, v in missing.items()
+                                                          if v},
+                    "final": final,
+                    "stats": {v: r.stats.as_dict() for v, r in results.items()},
+                    "files": files})
+        return EXIT_OK
+
+    _emit(f"{entry.name}: {len(variants)} variant(s) over {settings.t_stop:g} s on "
+          f"{COMPARE_POINTS} common output points ({settings.describe()})")
+    if len(variants) < 2:
+        _emit("only one variant: nothing to compare.")
+    else:
+        _emit(f"\nlargest deviation from the reference variant '{ref}' "
+              f"(relative to the largest |value| of the reference):")
+        rows = []
+        for v in variants[1:]:
+            for label in labels:
+                d = deviations[v].get(label)
+                unit = entry.output_units.get(label, "")
+                rows.append([v, label, unit] + (["-", "-"] if d is None else
+                            [f"{d['max_abs']:.3e}", f"{d['max_rel']:.3e}"]))
+        _emit(_table(["variant", "label", "unit", "max abs dev", "max rel dev"], rows,
+                     right="34"))
+        for v, labels_missing in missing.items():
+            if labels_missing:
+                _emit(f"note: variant '{v}' has no output {', '.join(labels_missing)}.")
+    _emit("\nsolver profile:")
+    _emit(_table(_PROFILE_HEADERS, _profile_rows({v: r.stats for v, r in results.items()}),
+                 right="2345678"))
+    for path in files.values():
+        _emit(f"\nwrote {path} (overlay plot)")
+    return EXIT_OK
+
+
+def _compare_plot(entry, results: dict[str, SimResult], labels: list[str], path: Path):
+    fig, axes = _new_figure(len(labels))
+    styles = ["-", "--", ":", "-."]
+    for axis, label in zip(axes, labels):
+        for k, (v, res) in enumerate(results.items()):
+            p = entry.output_paths(v).get(label)
+            if p is not None:
+                axis.plot(res.t, res[p], styles[k % len(styles)], label=f"{v} ({p})")
+        axis.set_ylabel(f"{label} {_unit_label(entry.output_units.get(label, ''))}")
+        axis.grid(True, alpha=0.3)
+        axis.legend(loc="best", fontsize="small")
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(f"{entry.name}: variants compared")
+    fig.savefig(path, dpi=100)
+
+
+# -------------------------------------------------------------------------------- demo
+@dataclass(frozen=True)
+class DemoCheck:
+    """A number the demo promises, with its limit."""
+
+    what: str
+    value: float
+    limit: float
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.value <= self.limit)
+
+
+@dataclass
+class DemoRun:
+    """What the demo steps share: settings, and what earlier steps produced."""
+
+    out: Path
+    say: Callable[[str], None] = _emit
+    name: str = "dc_motor"
+    variants: tuple[str, ...] = ("acausal", "ode")
+    t_stop: float = 0.5
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    rk4_dt: float = 1e-5
+    agreement_limit: float = 1e-8    # variants vs each other, relative to the peak
+    analytic_limit: float = 1e-8     # final values vs the analytic steady state
+    rk4_limit: float = 1e-4          # fixed-step vs variable-step, relative to the peak
+    entry: Any = None
+    models: dict[str, Any] = field(default_factory=dict)
+    compiled: dict[str, Any] = field(default_factory=dict)
+    compile_times: dict[str, float] = field(default_factory=dict)
+    results: dict[str, SimResult] = field(default_factory=dict)
+    fixed: SimResult | None = None
+    checks: list[DemoCheck] = field(default_factory=list)
+    files: list[Path] = field(default_factory=list)
+
+    def check(self, what: str, value: float, limit: float) -> DemoCheck:
+        c = DemoCheck(what, value, limit)
+        self.checks.append(c)
+        return c
+
+    def grid(self) -> np.ndarray:
+        """Output times: every RK4 step over the first 500 steps (the electrical transient
+        lasts some 50 us), then 990 more points; all on RK4 steps."""
+        fine = np.arange(500) * self.rk4_dt
+        return np.concatenate([fine, np.linspace(500 * self.rk4_dt, self.t_stop, 991)])
+
+    def path(self, variant: str, label: str) -> str:
+        return self.entry.output_paths(variant)[label]
+
+
+@dataclass(frozen=True)
+class DemoStep:
+    """One step of the demo: a title and a function of the shared :class:`DemoRun`."""
+
+    title: str
+    run: Callable[[DemoRun], None]
+
+
+def _demo_build(d: DemoRun) -> None:
+    d.entry = mt.models.get(d.name)
+    values = d.entry.values()
+    d.say("  parameters: " + ", ".join(f"{k} = {v:g} {d.entry.parameters[k].unit}"
+                                        for k, v in values.items()))
+    for v in d.variants:
+        m = d.models[v] = d.entry.build(v)
+        doc = (type(m).__doc__ or "").strip().splitlines()
+        parts = m.components
+        what = (f"{len(parts)} components ({', '.join(parts)})" if parts else
+                "equations written by hand")
+        d.say(f"  {v:8s} {doc[0] if doc else type(m).__name__}: {what}")
+
+
+def _demo_compile(d: DemoRun) -> None:
+    for v in d.variants:
+        t0 = time.perf_counter()
+        d.compiled[v] = cm = mt.compile_model(d.models[v])
+        d.compile_times[v] = time.perf_counter() - t0
+        d.say(f"  {v}: compiled in {_duration(d.compile_times[v])}")
+        for line in _report_lines(cm.report):
+            d.say(f"    {line}")
+
+
+def _report_lines(report: dict) -> list[str]:
+    """The compile report as text; tolerant of keys that a compiler version lacks."""
+    var, eq = report.get("variables", {}), report.get("equations", {})
+    lines = [f"equations/variables: {eq.get('flat', '?')}/{var.get('flat', '?')} flattened, "
+             f"{eq.get('after_alias', '?')}/{var.get('after_alias', '?')} after alias "
+             f"elimination ({report.get('aliases_eliminated', '?')} aliases), "
+             f"{eq.get('after_index_reduction', '?')} after index reduction"]
+    states = report.get("states", [])
+    diff = report.get("differentiated_equations", [])
+    lines.append(f"states ({len(states)}): {', '.join(states) or '-'}; "
+                 f"{var.get('algebraic', 0)} algebraic; "
+                 f"{len(diff)} equation(s) differentiated")
+    lines.append(f"BLT: {report.get('blocks', '?')} blocks, largest "
+                 f"{report.get('largest_block', '?')}, "
+                 f"{report.get('tearing_variables', 0)} tearing variable(s), "
+                 f"{report.get('relations', 0)} event relation(s)")
+    timings = dict(report.get("timings", {}))
+    total = timings.pop("total", None)
+    if timings:
+        lines.append("passes: " + ", ".join(f"{k} {_duration(s)}" for k, s in timings.items())
+                     + (f"; total {_duration(total)}" if total is not None else ""))
+    return lines
+
+
+def _demo_simulate(d: DemoRun) -> None:
+    grid = d.grid()
+    for v in d.variants:
+        res = d.results[v] = mt.simulate(d.compiled[v], d.t_stop, rtol=d.rtol, atol=d.atol,
+                                         t_out=grid)
+        res.stats.compile_time = d.compile_times[v]
+        finals = ", ".join(f"{label} = {res.final(p):.12g} {d.entry.output_units[label]}"
+                           for label, p in d.entry.output_paths(v).items())
+        d.say(f"  {v}: {d.t_stop:g} s, rtol {d.rtol:g}, atol {d.atol:g} -> {finals}")
+
+
+def _demo_agreement(d: DemoRun) -> None:
+    ref, others = d.variants[0], d.variants[1:]
+    for v in others:
+        for label in ("w", "i"):
+            dev, rel = _max_deviation(d.results[v][d.path(v, label)],
+                                      d.results[ref][d.path(ref, label)])
+            c = d.check(f"{v} vs {ref}: {label}", rel, d.agreement_limit)
+            d.say(f"  {label}: max |{v} - {ref}| = {dev:.3e} {d.entry.output_units[label]}"
+                  f", {rel:.3e} of the peak  [{'ok' if c.ok else 'FAILED'}, limit "
+                  f"{c.limit:g}]")
+
+
+def _demo_analytic(d: DemoRun) -> None:
+    p = d.entry.values()
+    den = p["R"] * p["B"] + p["k"] ** 2
+    exact = {"w": p["k"] * p["V"] / den, "i": p["B"] * p["V"] / den}
+    d.say(f"  steady state: w = k V / (R B + k^2) = {exact['w']:.12g} rad/s, "
+          f"i = B V / (R B + k^2) = {exact['i']:.12g} A")
+    for v in d.variants:
+        for label in ("w", "i"):
+            sim = d.results[v].final(d.path(v, label))
+            rel = _relative(abs(sim - exact[label]), abs(exact[label]))
+            c = d.check(f"{v}: final {label} vs analytic", rel, d.analytic_limit)
+            d.say(f"  {v:8s} {label}({d.t_stop:g} s) = {sim:.12g}, relative error "
+                  f"{rel:.1e}  [{'ok' if c.ok else 'FAILED'}]")
+
+
+def _demo_profile(d: DemoRun) -> None:
+    d.say(_table(_PROFILE_HEADERS, _profile_rows({v: d.results[v].stats
+                                                  for v in d.variants}),
+                 right="2345678"))
+
+
+def _demo_fixed_step(d: DemoRun) -> None:
+    v = d.variants[0]
+    d.fixed = fixed = mt.simulate(d.compiled[v], d.t_stop, solver="rk4", dt=d.rk4_dt)
+    st = fixed.stats
+    d.say(f"  {v}: RK4, dt {d.rk4_dt:g} s: {st.steps:,} steps, {st.rhs_evals:,} rhs evals "
+          f"in {_duration(st.wall_time)} ({st.wall_time / max(st.steps, 1) * 1e6:.2f} us "
+          f"per step, including setup)")
+    ref = d.results[v]
+    for label in ("w", "i"):
+        path = d.path(v, label)
+        dev, rel = _max_deviation(fixed.at(ref.t, path), ref[path])
+        c = d.check(f"RK4 vs variable-step: {label}", rel, d.rk4_limit)
+        d.say(f"  {label}: max |RK4 - variable-step| = {dev:.3e} "
+              f"{d.entry.output_units[label]}, {rel:.3e} of the peak  "
+              f"[{'ok' if c.ok else 'FAILED'}, limit {c.limit:g}]")
+
+
+def _demo_files(d: DemoRun) -> None:
+    d.out.mkdir(parents=True, exist_ok=True)
+    for v in d.variants:
+        d.files.append(d.results[v].save(d.out / f"{d.name}_{v}.csv"))
+    v = d.variants[0]
+    ref = d.results[v]
+    response = d.out / f"{d.name}_response.png"
+    ref.plot(*d.entry.output_paths(v).values(), path=response)
+    d.files.append(response)
+    d.files.append(_demo_startup_plot(d))
+    for f in d.files:
+        d.say(f"  wrote {f}")
+
+
+def _demo_startup_plot(d: DemoRun) -> Path:
+    """First 5 ms of both variants and RK4, and the RK4 deviation over the whole run."""
+    fig, axes = _new_figure(3, sharex=False)
+    window = 5e-3
+    for axis, label in zip(axes, ("w", "i")):
+        for k, v in enumerate(d.variants):
+            res = d.results[v]
+            keep = res.t <= window
+            axis.plot(res.t[keep] * 1e3, res[d.path(v, label)][keep], ["-", "--"][k % 2],
+                      label=f"{v}, variable-step")
+        if d.fixed is not None:
+            v = d.variants[0]
+            keep = d.fixed.t <= window
+            axis.plot(d.fixed.t[keep][::20] * 1e3, d.fixed[d.path(v, label)][keep][::20],
+                      ".", markersize=3, label=f"{v}, RK4 dt {d.rk4_dt:g} s")
+        axis.set_ylabel(f"{label} {_unit_label(d.entry.output_units[label])}")
+        axis.set_xlabel("t [ms]")
+        axis.grid(True, alpha=0.3)
+        axis.legend(loc="best", fontsize="small")
+    axis = axes[2]
+    if d.fixed is not None:
+        v = d.variants[0]
+        ref = d.results[v]
+        for label in ("w", "i"):
+            path = d.path(v, label)
+            err = np.abs(d.fixed.at(ref.t, path) - ref[path]) / np.max(np.abs(ref[path]))
+            axis.semilogy(ref.t, np.maximum(err, 1e-17), label=label)
+        axis.legend(loc="best", fontsize="small")
+    axis.set_ylabel("|RK4 - variable-step| / peak")
+    axis.set_xlabel("t [s]")
+    axis.grid(True, alpha=0.3)
+    fig.suptitle(f"{d.name}: start-up, acausal vs ODE vs fixed-step RK4")
+    path = d.out / f"{d.name}_startup.png"
+    fig.savefig(path, dpi=100)
+    return path
+
+
+#: The showcase, in order. Later features append or insert their own steps.
+DEMO_STEPS: list[DemoStep] = [
+    DemoStep("Build the DC motor both ways: acausal network and hand-written ODEs",
+             _demo_build),
+    DemoStep("Compile: flatten, alias elimination, index reduction, BLT, lowering",
+             _demo_compile),
+    DemoStep("Simulate with CVODES at tight tolerance", _demo_simulate),
+    DemoStep("Agreement of the two variants", _demo_agreement),
+    DemoStep("Analytic steady state versus simulation", _demo_analytic),
+    DemoStep("Solver profile", _demo_profile),
+    DemoStep("Fixed-step RK4 (the step function of code generation and HIL)",
+             _demo_fixed_step),
+    DemoStep("Plots and simulation logs", _demo_files),
+]
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    d = DemoRun(out=Path(args.out))
+    start = time.perf_counter()
+    _emit(f"Mechatron {mt.__version__} demo")
+    for k, step in enumerate(DEMO_STEPS, 1):
+        _emit(f"\n[{k}/{len(DEMO_STEPS)}] {step.title}")
+        t0 = time.perf_counter()
+        step.run(d)
+        _emit(f"  ({_duration(time.perf_counter() - t0)})")
+    failed = [c for c in d.checks if not c.ok]
+    _emit(f"\ndemo finished in {_duration(time.perf_counter() - start)}: "
+          f"{len(d.checks) - len(failed)} of {len(d.checks)} checks passed; "
+          f"{len(d.files)} files in {d.out}")
+    for c in failed:
+        _emit(f"FAILED: {c.what}: {c.value:.3e} > {c.limit:g}")
+    return EXIT_FAILURE if failed else EXIT_OK
+
+
+# ------------------------------------------------------------------------------ parser
+def _add_json(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object on stdout instead of the summary")
+
+
+def _add_set(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--set", action="append", default=[], metavar="P=VALUE",
+                   help="set model parameter P (by its name in `mechatron show`); a plain "
+                        "number is SI, or give a unit: --set \"L=340 uH\". Repeatable.")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``mechatron`` command."""
+    parser = argparse.ArgumentParser(
+        prog="mechatron",
+        description="Acausal modeling and simulation of mechatronic systems.",
+        epilog="Errors are reported as one line on stderr (exit code 2 for bad input); "
+               "set MECHATRON_DEBUG=1 for tracebacks.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {mt.__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    p = sub.add_parser("models", help="list the model database",
+                       description="List the models of the database: name, variants and a "
+                                   "one-line description.")
+    p.add_argument("--tag", metavar="T", help="only models with tag T (e.g. motor)")
+    _add_json(p)
+    p.set_defaults(func=cmd_models)
+
+    p = sub.add_parser("show", help="describe one model",
+                       description="Describe one model: parameters with units, defaults "
+                                   "and sources; variants; outputs; experiment; expected "
+                                   "values.")
+    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    _add_json(p)
+    p.set_defaults(func=cmd_show)
+
+    p = sub.add_parser("simulate", help="simulate one model",
+                       description="Build, compile and simulate one variant of a model; "
+                                   "print the final value of each output and the solver "
+                                   "profile. Defaults come from the model's experiment.")
+    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("--variant", metavar="V", help="variant to build (default: the first)")
+    p.add_argument("--t-stop", type=float, metavar="T", help="end time in s")
+    _add_set(p)
+    p.add_argument("--solver", metavar="S",
+                   help="auto, cvodes, idas, or a fixed-step method: "
+                        + ", ".join(FIXED_STEP_METHODS) + " (these need --dt)")
+    p.add_argument("--dt", type=float, metavar="H", help="step of a fixed-step solver, in s")
+    p.add_argument("--rtol", type=float, metavar="R", help="relative tolerance")
+    p.add_argument("--atol", type=float, metavar="A", help="absolute tolerance")
+    p.add_argument("--out", metavar="FILE",
+                   help="write the whole simulation log (.csv: columns t, then instance "
+                        "paths; or .parquet)")
+    p.add_argument("--plot", metavar="FILE.png", help="write a plot of the outputs")
+    _add_json(p)
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("compare", help="compare all variants of a model",
+                       description="Simulate every variant of a model on the same "
+                                   f"{COMPARE_POINTS}-point output grid with the "
+                                   "experiment's solver and tolerances, and print the "
+                                   "largest deviation of each output from the first "
+                                   "variant.")
+    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("--t-stop", type=float, metavar="T", help="end time in s")
+    _add_set(p)
+    p.add_argument("--out", metavar="FILE.png", help="write an overlay plot")
+    _add_json(p)
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("demo", help="the showcase, end to end",
+                       description="Build the DC motor as an acausal network and as ODEs, "
+                                   "compile, simulate, check against the analytic steady "
+                                   "state and a fixed-step RK4 run, and write plots and "
+                                   "logs.")
+    p.add_argument("--out", metavar="DIR", default="demo_output",
+                   help="directory for plots and logs (default: %(default)s)")
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+# -------------------------------------------------------------------------------- main
+def _debug() -> bool:
+    return os.environ.get("MECHATRON_DEBUG", "").strip() not in ("", "0")
+
+
+def _fail(message: str, code: int) -> int:
+    if _debug():
+        traceback.print_exc()
+    print(f"error: {_one_line(message)}", file=sys.stderr)
+    return code
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``mechatron`` command with ``argv`` (default: ``sys.argv[1:]``).
+
+    Returns the exit code: 0 on success, 2 for bad arguments or input, 1 otherwise.
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, or a usage error (already printed)
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    try:
+        return int(args.func(args) or EXIT_OK)
+    except KeyboardInterrupt:
+        print("error: interrupted.", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `mechatron models | head -1`
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_OK
+    except USER_ERRORS as exc:
+        return _fail(str(exc), EXIT_USAGE)
+    except Exception as exc:  # a bug: still one line, the traceback on request
+        return _fail(f"unexpected {type(exc).__name__}: {exc} (a bug in Mechatron; "
+                     f"run with MECHATRON_DEBUG=1 for the traceback and report it)",
+                     EXIT_FAILURE)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

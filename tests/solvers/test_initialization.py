@@ -1,0 +1,61 @@
+"""Consistent initialization with start-value priorities."""
+
+import pytest
+
+import mechatron as mt
+from mechatron.errors import InitializationError
+from mechatron.library import electrical as el
+from mechatron.library import rotational as rot
+
+from compiler.test_index_reduction import GearedInertias
+
+
+def test_high_target_on_a_non_state_sets_the_state():
+    m = GearedInertias()
+    m.j2._starts["w"] = mt.Start(3.0, "high")
+    res = mt.simulate(m, 1e-3, rtol=1e-10, atol=1e-12)
+    assert res["j2.w"][0] == pytest.approx(3.0, rel=1e-9)
+    assert res["j1.w"][0] == pytest.approx(9.0, rel=1e-9)
+    entry = next(e for e in res.initialization if e["variable"] == "j2.w")
+    assert entry["met"] and entry["priority"] == "high"
+
+
+def test_low_target_yields_to_a_high_one_and_the_report_says_so():
+    m = GearedInertias()
+    m.j1._starts["w"] = mt.Start(9.0, "high")
+    m.j2._starts["w"] = mt.Start(5.0, "low")
+    res = mt.simulate(m, 1e-3)
+    report = {e["variable"]: e for e in res.initialization}
+    assert report["j1.w"]["met"]
+    assert not report["j2.w"]["met"]
+    assert report["j2.w"]["value"] == pytest.approx(3.0, rel=1e-6)
+
+
+def test_conflicting_high_targets_name_both():
+    m = mt.System("parallel")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    r1 = m.add("r1", el.Resistor(R=10.0))
+    c1 = m.add("c1", el.Capacitor(C=1e-3, v=1.0))
+    c2 = m.add("c2", el.Capacitor(C=2e-3, v=2.0))
+    g = m.add("g", el.ElectricalReference())
+    m.connect(src.p, r1.p)
+    m.connect(r1.n, c1.p, c2.p)
+    m.connect(src.n, c1.n, c2.n, g.port)
+    with pytest.raises(InitializationError, match=r"c1\.v.*c2\.v|c2\.v.*c1\.v") as info:
+        mt.simulate(m, 1e-3)
+    assert {"c1.v", "c2.v"} <= set(info.value.variables)
+
+
+def test_state_start_values_are_used_and_reported():
+    m = mt.System("decay")
+    j = m.add("j", rot.Inertia(J=2.0, w="60 rpm"))
+    d = m.add("d", rot.RotationalDamper(D=4.0))
+    ref = m.add("ref", rot.RotationalReference())
+    m.connect(j.port, d.A)
+    m.connect(d.B, ref.port)
+    res = mt.simulate(m, 1.0, rtol=1e-10, atol=1e-12)
+    import math
+    w0 = 2 * math.pi
+    assert res["j.w"][0] == pytest.approx(w0)
+    assert res.final("j.w") == pytest.approx(w0 * math.exp(-4.0 / 2.0), rel=1e-8)
+    assert res.initialization[0]["variable"] == "j.w" and res.initialization[0]["met"]
