@@ -1,0 +1,247 @@
+"""Compile-time and simulation scaling with model size, and a hand-written SciPy baseline.
+
+Two models built with ``mt.System`` for N = 10, 100, 1000, 10000:
+
+* RC ladder: a DC voltage source (1 V, switched on at t = 0 onto discharged capacitors),
+  then N sections of a series resistor (1 Ohm) and a capacitor (1 mF) to ground.
+* Mass-spring chain: N masses (1 kg), each linked to the previous one (the first to a
+  fixed reference) by a spring (1e4 N/m) and a damper (50 N*s/m) in parallel; a force step
+  of 1 N (``blocks.Step`` at t = 0.1 s into an ``IdealForceSource``) on the last mass.
+
+For each: time to build the instance, compile time (wall clock, and per pass from
+``report["timings"]``), equation and variable counts before/after, number of states, and
+the wall time of ``mt.simulate`` over 1 s with CVODES (first call, which builds the
+integrator, and a second call). The growth exponent ``a`` of ``t ~ N**a`` is fitted
+between successive N.
+
+The SciPy baseline integrates the RC ladder written by hand as a tridiagonal linear ODE
+``C v' = (tridiagonal Laplacian) v / R + source`` with ``solve_ivp(method="BDF")`` and the
+constant sparse Jacobian, same tolerances and output points.
+
+``--quick`` skips N = 10000. Run: ``python bench/bench_scaling.py [--quick]``.
+"""
+
+from __future__ import annotations
+
+import gc
+
+import _common  # noqa: F401  (import path)
+from _common import clock, growth_exponent, log, main, ratio, repeat, summary
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.integrate import solve_ivp
+
+import mechatron as mt
+from mechatron.library import blocks
+from mechatron.library import electrical as el
+from mechatron.library import translational as tr
+
+SIZES = (10, 100, 1000, 10000)
+T_STOP = 1.0
+RTOL, ATOL = 1e-6, 1e-8
+N_OUT = 1001
+N_OUT_LARGE = 101      # output points when N = 10000 (see _grid)
+GOALS = {1000: 2.0, 10000: 20.0}   # compile-time goals of the project, s
+
+# RC ladder and chain parameters
+R_SERIES, C_SHUNT, V_SOURCE = 1.0, 1e-3, 1.0
+MASS, SPRING, DAMPER, FORCE, T_FORCE = 1.0, 1e4, 50.0, 1.0, 0.1
+
+
+# -- models ---------------------------------------------------------------------------------
+def rc_ladder(n: int) -> mt.System:
+    """Voltage source, then ``n`` sections of series resistor + capacitor to ground."""
+    m = mt.System(f"rc_ladder_{n}")
+    src = m.add("src", el.DCVoltageSource(V=V_SOURCE))
+    gnd = m.add("gnd", el.ElectricalReference())
+    m.connect(src.n, gnd.port)
+    node = src.p
+    for k in range(n):
+        r = m.add(f"r{k}", el.Resistor(R=R_SERIES))
+        c = m.add(f"c{k}", el.Capacitor(C=C_SHUNT))
+        m.connect(node, r.p)
+        m.connect(r.n, c.p)
+        m.connect(c.n, gnd.port)
+        node = r.n
+    return m
+
+
+def mass_spring_chain(n: int) -> mt.System:
+    """``n`` masses in a chain of springs and dampers from a fixed reference; force step on
+    the last mass."""
+    m = mt.System(f"mass_spring_chain_{n}")
+    ref = m.add("ref", tr.TranslationalReference())
+    prev = ref.port
+    mass = None
+    for k in range(n):
+        mass = m.add(f"m{k}", tr.Mass(m=MASS))
+        spring = m.add(f"k{k}", tr.TranslationalSpring(k=SPRING))
+        damper = m.add(f"b{k}", tr.TranslationalDamper(b=DAMPER))
+        m.connect(mass.port, spring.A, damper.A)
+        m.connect(spring.B, damper.B, prev)
+        prev = mass.port
+    step = m.add("step", blocks.Step(t_step=T_FORCE, initial=0.0, final=FORCE))
+    force = m.add("force", tr.IdealForceSource())
+    m.connect(step.y, force.f_in)
+    m.connect(force.A, mass.port)
+    m.connect(force.B, ref.port)
+    return m
+
+
+MODELS = {"rc_ladder": (rc_ladder, lambda n: [f"c{k}.v" for k in range(n)]),
+          "mass_spring_chain": (mass_spring_chain, lambda n: [f"m{k}.v" for k in range(n)])}
+
+
+# -- the SciPy baseline ---------------------------------------------------------------------
+def scipy_rc_ladder(n: int, t_out: np.ndarray, repeats: int) -> dict:
+    """The RC ladder by hand: ``v' = (A v + b)``, A tridiagonal, BDF with sparse Jacobian."""
+    g = 1.0 / (R_SERIES * C_SHUNT)
+    main_diag = np.full(n, -2.0 * g)
+    main_diag[-1] = -g                       # the last capacitor has one resistor only
+    off = np.full(n - 1, g)
+    A = sp.diags([off, main_diag, off], [-1, 0, 1], format="csc")
+    b = np.zeros(n)
+    b[0] = g * V_SOURCE
+
+    def rhs(t, v):
+        return A @ v + b
+
+    def once():
+        return solve_ivp(rhs, (0.0, T_STOP), np.zeros(n), method="BDF", jac=A,
+                         t_eval=t_out, rtol=RTOL, atol=ATOL)
+
+    sol, times = repeat(once, repeats)
+    return {"time": summary(times), "success": bool(sol.success), "nfev": sol.nfev,
+            "njev": sol.njev, "nlu": sol.nlu, "final": sol.y[:, -1]}
+
+
+# -- one size -------------------------------------------------------------------------------
+def _grid(n: int) -> np.ndarray:
+    # Every logged variable is evaluated at every output point: at N = 10000 that is
+    # 1.2e5 variables x 1001 points (1 GB as float64, several GB on the way through
+    # casadi.DM), so the largest size logs fewer points.
+    return np.linspace(0.0, T_STOP, N_OUT if n < 10000 else N_OUT_LARGE)
+
+
+def _integrator_only(cm, grid) -> float | None:
+    """Seconds of the CasADi CVODES call alone (no initialization, no logging)."""
+    try:
+        from mechatron.solvers.initial import initialize
+        from mechatron.solvers.variable import integrate_variable
+        p = cm.p0.copy()
+        X0, z0, _ = initialize(cm, p, 0.0)
+        _, dt = clock(integrate_variable, cm, grid, X0, z0, p, solver="cvodes", rtol=RTOL,
+                      atol=ATOL)
+        return dt
+    except Exception as exc:  # internals may change under us; the figure is optional
+        log(f"integrator-only timing unavailable: {type(exc).__name__}: {exc}")
+        return None
+
+
+def measure(kind: str, n: int, *, simulate_twice: bool = True) -> dict:
+    build, observed = MODELS[kind]
+    model, t_build = clock(build, n)
+    cm, t_compile = clock(mt.compile_model, model)
+    rep = cm.report
+    log(f"{kind} N={n}: compile {t_compile:.3f} s "
+        f"({', '.join(f'{k} {v:.3f}' for k, v in rep.get('timings', {}).items())})")
+    grid = _grid(n)
+    row = {"N": n, "build_s": t_build, "compile_s": t_compile,
+           "passes_s": dict(rep.get("timings", {})),
+           "equations": rep.get("equations"), "variables": rep.get("variables"),
+           "n_states": len(cm.state_names), "aliases_eliminated": rep.get("aliases_eliminated"),
+           "logged_variables": len(cm.names), "output_points": grid.size}
+
+    def sim():
+        return mt.simulate(cm, T_STOP, solver="cvodes", rtol=RTOL, atol=ATOL, t_out=grid)
+
+    res, t_first = clock(sim)
+    row["simulate_first_s"] = t_first
+    if simulate_twice:
+        res, t_second = clock(sim)
+        row["simulate_second_s"] = t_second
+    row["integrator_only_s"] = _integrator_only(cm, grid)
+    st = res.stats
+    row["solver_stats"] = {"solver": st.solver, "steps": st.steps,
+                           "rejected_steps": st.rejected_steps, "rhs_evals": st.rhs_evals,
+                           "jac_evals": st.jac_evals, "events": st.events}
+    final = np.array([res[name][-1] for name in observed(n)])
+    log(f"{kind} N={n}: simulate first {t_first:.3f} s"
+        + (f", second {row['simulate_second_s']:.3f} s" if simulate_twice else "")
+        + (f", integrator alone {row['integrator_only_s']:.3f} s"
+           if row["integrator_only_s"] is not None else ""))
+    return row, final, grid
+
+
+def _exponents(rows: list[dict], key) -> list[dict]:
+    out = []
+    for a, b in zip(rows, rows[1:]):
+        ta, tb = key(a), key(b)
+        out.append({"from_N": a["N"], "to_N": b["N"],
+                    "exponent": growth_exponent(a["N"], ta, b["N"], tb)})
+    return out
+
+
+def run(quick: bool = False) -> dict:
+    """Compile-time and simulation scaling (RC ladder, mass-spring chain) and SciPy baseline."""
+    sizes = [n for n in SIZES if not (quick and n >= 10000)]
+    out = {"benchmark": "scaling",
+           "settings": {"sizes": sizes, "t_stop_s": T_STOP, "rtol": RTOL, "atol": ATOL,
+                        "solver": "cvodes", "output_points": N_OUT,
+                        "output_points_N10000": N_OUT_LARGE,
+                        "rc_ladder": {"R_ohm": R_SERIES, "C_F": C_SHUNT, "V": V_SOURCE},
+                        "mass_spring_chain": {"m_kg": MASS, "k_N_m": SPRING,
+                                              "b_N_s_m": DAMPER, "force_N": FORCE,
+                                              "t_force_s": T_FORCE}},
+           "models": {}}
+    for kind in MODELS:
+        rows = []
+        for n in sizes:
+            gc.collect()
+            row, final, grid = measure(kind, n, simulate_twice=n < 10000)
+            if kind == "rc_ladder":
+                base = scipy_rc_ladder(n, grid, repeats=3 if n <= 100 else 1)
+                mech = row.get("simulate_second_s", row["simulate_first_s"])
+                row["scipy_bdf_sparse"] = {
+                    "time": base["time"], "success": base["success"], "nfev": base["nfev"],
+                    "njev": base["njev"], "nlu": base["nlu"],
+                    "ratio_scipy_over_mechatron_simulate": ratio(base["time"]["median_s"],
+                                                                 mech),
+                    "ratio_scipy_over_mechatron_integrator_only":
+                        ratio(base["time"]["median_s"], row["integrator_only_s"]),
+                    "max_abs_diff_final_v": float(np.max(np.abs(final - base["final"]))),
+                }
+                log(f"rc_ladder N={n}: scipy BDF {base['time']['median_s']:.3f} s")
+            rows.append(row)
+        goals = {str(n): {"goal_s": GOALS[n], "compile_s": r["compile_s"],
+                          "met": r["compile_s"] < GOALS[n]}
+                 for r in rows for n in [r["N"]] if n in GOALS}
+        passes = sorted({k for r in rows for k in r["passes_s"] if k != "total"})
+        out["models"][kind] = {
+            "rows": rows,
+            "compile_goals": goals,
+            "growth_exponents": {
+                "compile": _exponents(rows, lambda r: r["compile_s"]),
+                "per_pass": {p: _exponents(rows, lambda r, p=p: r["passes_s"].get(p))
+                             for p in passes},
+                "simulate": _exponents(rows, lambda r: r.get("simulate_second_s",
+                                                             r["simulate_first_s"])),
+                "integrator_only": _exponents(rows, lambda r: r["integrator_only_s"]),
+            },
+        }
+    out["notes"] = [
+        "Timings are wall clock on a shared machine (see environment.load_average).",
+        f"N = 10000 logs {N_OUT_LARGE} output points instead of {N_OUT} and simulates once "
+        "(first call only); its simulate time is therefore not comparable row to row.",
+        "simulate_* is mt.simulate on the compiled model (initialization, integration, "
+        "evaluation of every logged variable at every output point); integrator_only_s is "
+        "the CVODES call alone.",
+        "rc_ladder ratio: SciPy time / Mechatron simulate time (second call when there is "
+        "one); > 1 means Mechatron is faster.",
+    ]
+    return out
+
+
+if __name__ == "__main__":
+    main(run)
