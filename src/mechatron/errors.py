@@ -20,6 +20,7 @@ __all__ = [
     "InitializationError",
     "SimulationError",
     "DataError",
+    "UnknownVariableError",
 ]
 
 
@@ -67,3 +68,15 @@ class SimulationError(MechatronError, RuntimeError):
 
 class DataError(MechatronError, ValueError):
     """Measured or user-supplied data are malformed (NaN, missing column, bad time axis)."""
+
+
+class UnknownVariableError(MechatronError, KeyError):
+    """A variable name that a simulation log (or model) does not hold.
+
+    Subclasses :class:`KeyError`, so ``except KeyError`` keeps working. ``path`` is the
+    name asked for; ``variables`` lists the closest known names (the suggestions).
+    """
+
+    def __str__(self) -> str:
+        # KeyError would show the repr of the message, quotes and escaped newlines included.
+        return str(self.args[0]) if self.args else ""

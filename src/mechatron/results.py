@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mechatron.errors import DataError, MechatronError
+from mechatron.errors import DataError, UnknownVariableError
 
 if TYPE_CHECKING:  # imported lazily at run time: they are only needed to export or plot
     import pandas
@@ -51,18 +51,6 @@ SUFFIXES = (".csv", ".parquet")
 _METADATA_KEY = b"mechatron"
 _FORMAT_VERSION = 1
 _N_SUGGESTIONS = 5
-
-
-class UnknownVariableError(MechatronError, KeyError):
-    """A variable name that the simulation log does not hold.
-
-    Subclasses :class:`KeyError`, so ``except KeyError`` keeps working. ``path`` is the
-    name asked for; ``variables`` lists the closest logged names (the suggestions).
-    """
-
-    def __str__(self) -> str:
-        # KeyError would show the repr of the message, quotes and escaped newlines included.
-        return str(self.args[0]) if self.args else ""
 
 
 @dataclass

@@ -57,10 +57,9 @@ def strongly_connected_components(n: int, succ: Sequence[Sequence[int]]) -> list
     """
     if len(succ) != n:
         raise ValueError(f"succ must have one entry per node ({n}), got {len(succ)}.")
+    done = n + 1  # index of nodes already in a component: never below a low-link
     index = [UNMATCHED] * n
     low = [0] * n
-    on_stack = [False] * n
-    pos = [0] * n
     stack: list[int] = []
     components: list[list[int]] = []
     counter = 0
@@ -70,29 +69,27 @@ def strongly_connected_components(n: int, succ: Sequence[Sequence[int]]) -> list
         index[start] = low[start] = counter
         counter += 1
         stack.append(start)
-        on_stack[start] = True
         path = [start]
+        edges = [iter(succ[start])]
         while path:
             u = path[-1]
-            edges = succ[u]
-            i = pos[u]
-            if i < len(edges):
-                pos[u] = i + 1
-                w = edges[i]
+            for w in edges[-1]:
                 if index[w] == UNMATCHED:
                     index[w] = low[w] = counter
                     counter += 1
                     stack.append(w)
-                    on_stack[w] = True
                     path.append(w)
-                elif on_stack[w] and index[w] < low[u]:
+                    edges.append(iter(succ[w]))
+                    break
+                if index[w] < low[u]:
                     low[u] = index[w]
-                continue
-            path.pop()
-            if path and low[u] < low[path[-1]]:
-                low[path[-1]] = low[u]
-            if low[u] == index[u]:
-                components.append(_pop_component(stack, on_stack, u))
+            else:
+                path.pop()
+                edges.pop()
+                if path and low[u] < low[path[-1]]:
+                    low[path[-1]] = low[u]
+                if low[u] == index[u]:
+                    components.append(_pop_component(stack, index, u, done))
     return components
 
 
@@ -133,14 +130,17 @@ def block_lower_triangular(n_var: int, adj: Sequence[Sequence[int]],
             if eq_to_var[eqs[0]] != UNMATCHED]
 
 
-def _pop_component(stack: list[int], on_stack: list[bool], root: int) -> list[int]:
-    """Pop the nodes above and including `root` from Tarjan's stack, sorted."""
+def _pop_component(stack: list[int], index: list[int], root: int, done: int) -> list[int]:
+    """Pop the nodes above and including `root` from Tarjan's stack, sorted.
+
+    Their index is set to `done`, so that later edges into them never lower a low-link.
+    """
     i = len(stack) - 1
     while stack[i] != root:
         i -= 1
     component = stack[i:]
     del stack[i:]
     for w in component:
-        on_stack[w] = False
+        index[w] = done
     component.sort()
     return component

@@ -6,9 +6,10 @@ A system of ``n_eq`` equations in ``n_var`` variables is described by its incide
 ``(e, v)`` reads "equation ``e`` is solved for variable ``v``". Unmatched entries are
 ``-1`` in both directions.
 
-`maximum_matching` first matches greedily, then grows the matching along shortest
-augmenting paths in phases (Hopcroft–Karp), so its cost is ``O(m sqrt(n))`` for ``m``
-incidences. Every search is iterative: paths of any length are fine.
+`maximum_matching` first matches greedily (Karp–Sipser when a plain greedy pass
+leaves many equations free), then grows the matching along shortest augmenting paths
+in phases (Hopcroft–Karp), so its cost is ``O(m sqrt(n))`` for ``m`` incidences.
+Every search is iterative: paths of any length are fine.
 
 The private helper `augment_from` grows a matching by one augmenting path from a
 single root and reports what it visited when there is none; Pantelides' algorithm
@@ -93,19 +94,28 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
 
     Notes
     -----
-    Greedy start, then Hopcroft–Karp phases: a breadth-first search layers the graph
-    from the free equations, and iterative depth-first searches augment along
-    vertex-disjoint shortest paths. Cost ``O(m sqrt(n))``.
+    Greedy start (first free variable of each equation); when that leaves more than 1 %
+    of the equations free, a Karp–Sipser start instead (pairs forced by a vertex of
+    degree one first, else the free variable of least degree). Then Hopcroft–Karp
+    phases: a breadth-first search layers the graph from the free equations, and
+    iterative depth-first searches augment along vertex-disjoint shortest paths. Cost
+    ``O(m sqrt(n))``.
     """
     check_adjacency(n_var, adj)
-    ok = allowed_mask(n_var, allowed)
+    rows = adj
+    if allowed is not None:
+        ok = allowed_mask(n_var, allowed)
+        rows = [[v for v in row if ok[v]] for row in adj]
     if initial is None:
-        eq_to_var = [UNMATCHED] * len(adj)
+        eq_to_var = [UNMATCHED] * len(rows)
         var_to_eq = [UNMATCHED] * n_var
+        free = _greedy(rows, eq_to_var, var_to_eq)
+        if free > max(100, len(rows) // 100):
+            eq_to_var, var_to_eq = _karp_sipser(n_var, rows)
     else:
-        eq_to_var, var_to_eq = _copy_initial(initial, n_var, adj, ok)
-    _greedy(adj, ok, eq_to_var, var_to_eq)
-    _hopcroft_karp(adj, ok, eq_to_var, var_to_eq)
+        eq_to_var, var_to_eq = _copy_initial(initial, n_var, rows)
+        _greedy(rows, eq_to_var, var_to_eq)
+    _hopcroft_karp(rows, eq_to_var, var_to_eq)
     return Matching(eq_to_var, var_to_eq)
 
 
@@ -224,53 +234,109 @@ def _flip(eqs: list[int], via: list[int], eq_to_var: list[int],
         var_to_eq[v] = e
 
 
-def _copy_initial(initial: Matching, n_var: int, adj: Sequence[Sequence[int]],
-                  ok: list[bool]) -> tuple[list[int], list[int]]:
-    """Validate `initial` against the graph and return copies of its two arrays."""
+def _copy_initial(initial: Matching, n_var: int,
+                  rows: Sequence[Sequence[int]]) -> tuple[list[int], list[int]]:
+    """Validate `initial` against the allowed incidence `rows`; return copies of it."""
     eq_to_var = list(initial.eq_to_var)
     var_to_eq = list(initial.var_to_eq)
-    if len(eq_to_var) != len(adj) or len(var_to_eq) != n_var:
+    if len(eq_to_var) != len(rows) or len(var_to_eq) != n_var:
         raise ValueError(f"initial matching has sizes ({len(eq_to_var)}, "
-                         f"{len(var_to_eq)}), expected ({len(adj)}, {n_var}).")
+                         f"{len(var_to_eq)}), expected ({len(rows)}, {n_var}).")
     for e, v in enumerate(eq_to_var):
         if v == UNMATCHED:
             continue
-        if not (0 <= v < n_var and var_to_eq[v] == e and ok[v] and v in adj[e]):
+        if not (0 <= v < n_var and var_to_eq[v] == e and v in rows[e]):
             raise ValueError(f"initial matching pairs equation {e} with variable {v}, "
                              "which is not an allowed incidence of a consistent matching.")
     for v, e in enumerate(var_to_eq):
-        if e != UNMATCHED and not (0 <= e < len(adj) and eq_to_var[e] == v):
+        if e != UNMATCHED and not (0 <= e < len(rows) and eq_to_var[e] == v):
             raise ValueError(f"initial matching is inconsistent at variable {v}.")
     return eq_to_var, var_to_eq
 
 
-def _greedy(adj: Sequence[Sequence[int]], ok: list[bool], eq_to_var: list[int],
-            var_to_eq: list[int]) -> None:
-    """Match each free equation to its first free allowed variable."""
-    for e, row in enumerate(adj):
+def _greedy(rows: Sequence[Sequence[int]], eq_to_var: list[int],
+            var_to_eq: list[int]) -> int:
+    """Match each free equation to its first free variable; return the free count."""
+    free = 0
+    for e, row in enumerate(rows):
         if eq_to_var[e] != UNMATCHED:
             continue
         for v in row:
-            if ok[v] and var_to_eq[v] == UNMATCHED:
+            if var_to_eq[v] == UNMATCHED:
                 eq_to_var[e] = v
                 var_to_eq[v] = e
                 break
+        else:
+            free += 1
+    return free
 
 
-def _hopcroft_karp(adj: Sequence[Sequence[int]], ok: list[bool], eq_to_var: list[int],
+def _karp_sipser(n_var: int, rows: Sequence[Sequence[int]]) -> tuple[list[int], list[int]]:
+    """Karp–Sipser matching: forced pairs first, else the variable of least degree.
+
+    A variable left in a single equation (or an equation left with a single variable)
+    is matched there, which no maximum matching regrets; otherwise the next free
+    equation takes its free variable of least remaining degree. Degrees count the
+    free vertices only. ``O(m)``.
+    """
+    n_eq = len(rows)
+    cols: list[list[int]] = [[] for _ in range(n_var)]
+    for e, row in enumerate(rows):
+        for v in row:
+            cols[v].append(e)
+    eq_deg = [len(row) for row in rows]
+    var_deg = [len(col) for col in cols]
+    eq_to_var = [UNMATCHED] * n_eq
+    var_to_eq = [UNMATCHED] * n_var
+    lone_vars = [v for v in range(n_var) if var_deg[v] == 1]
+    lone_eqs = [e for e in range(n_eq) if eq_deg[e] == 1]
+    scan = 0
+    while True:
+        if lone_vars:
+            v = lone_vars.pop()
+            if var_deg[v] != 1 or var_to_eq[v] != UNMATCHED:
+                continue
+            e = next(e for e in cols[v] if eq_to_var[e] == UNMATCHED)
+        elif lone_eqs:
+            e = lone_eqs.pop()
+            if eq_deg[e] != 1 or eq_to_var[e] != UNMATCHED:
+                continue
+            v = next(v for v in rows[e] if var_to_eq[v] == UNMATCHED)
+        else:
+            while scan < n_eq and (eq_to_var[scan] != UNMATCHED or eq_deg[scan] == 0):
+                scan += 1
+            if scan == n_eq:
+                return eq_to_var, var_to_eq
+            e = scan
+            v = min((u for u in rows[e] if var_to_eq[u] == UNMATCHED),
+                    key=var_deg.__getitem__)
+        eq_to_var[e] = v
+        var_to_eq[v] = e
+        for u in rows[e]:
+            if var_to_eq[u] == UNMATCHED:
+                var_deg[u] -= 1
+                if var_deg[u] == 1:
+                    lone_vars.append(u)
+        for f in cols[v]:
+            if eq_to_var[f] == UNMATCHED:
+                eq_deg[f] -= 1
+                if eq_deg[f] == 1:
+                    lone_eqs.append(f)
+
+
+def _hopcroft_karp(rows: Sequence[Sequence[int]], eq_to_var: list[int],
                    var_to_eq: list[int]) -> None:
     """Augment along shortest paths, phase by phase, until none is left."""
-    n_eq = len(adj)
+    n_eq = len(rows)
     unset = n_eq + 1
     dist = [unset] * n_eq
     pos = [0] * n_eq
-    free = [e for e in range(n_eq) if eq_to_var[e] == UNMATCHED and len(adj[e])]
+    free = [e for e in range(n_eq) if eq_to_var[e] == UNMATCHED and len(rows[e])]
     while free:
-        layered, limit = _layers(adj, ok, var_to_eq, free, dist, unset)
+        layered, limit = _layers(rows, var_to_eq, free, dist, unset)
         if limit != unset:
             for root in free:
-                _layered_augment(root, adj, ok, eq_to_var, var_to_eq, dist, pos,
-                                 limit, unset)
+                _layered_augment(root, rows, eq_to_var, var_to_eq, dist, pos, limit, unset)
         for e in layered:
             dist[e] = unset
             pos[e] = 0
@@ -279,8 +345,8 @@ def _hopcroft_karp(adj: Sequence[Sequence[int]], ok: list[bool], eq_to_var: list
         free = [e for e in free if eq_to_var[e] == UNMATCHED]
 
 
-def _layers(adj: Sequence[Sequence[int]], ok: list[bool], var_to_eq: list[int],
-            free: list[int], dist: list[int], unset: int) -> tuple[list[int], int]:
+def _layers(rows: Sequence[Sequence[int]], var_to_eq: list[int], free: list[int],
+            dist: list[int], unset: int) -> tuple[list[int], int]:
     """Breadth-first layering from the free equations.
 
     Sets ``dist[e]`` for every equation reached and returns them with the length of
@@ -290,16 +356,11 @@ def _layers(adj: Sequence[Sequence[int]], ok: list[bool], var_to_eq: list[int],
     for e in queue:
         dist[e] = 0
     limit = unset
-    head = 0
-    while head < len(queue):
-        e = queue[head]
-        head += 1
+    for e in queue:
         d = dist[e] + 1
         if d > limit:
             break
-        for v in adj[e]:
-            if not ok[v]:
-                continue
+        for v in rows[e]:
             f = var_to_eq[v]
             if f == UNMATCHED:
                 limit = d
@@ -309,23 +370,21 @@ def _layers(adj: Sequence[Sequence[int]], ok: list[bool], var_to_eq: list[int],
     return queue, limit
 
 
-def _layered_augment(root: int, adj: Sequence[Sequence[int]], ok: list[bool],
-                     eq_to_var: list[int], var_to_eq: list[int], dist: list[int],
-                     pos: list[int], limit: int, unset: int) -> bool:
+def _layered_augment(root: int, rows: Sequence[Sequence[int]], eq_to_var: list[int],
+                     var_to_eq: list[int], dist: list[int], pos: list[int], limit: int,
+                     unset: int) -> bool:
     """Depth-first search for a shortest augmenting path in the layered graph."""
     eqs = [root]
     via: list[int] = []
     while eqs:
         e = eqs[-1]
-        row = adj[e]
+        row = rows[e]
         d = dist[e] + 1
         i = pos[e]
         n = len(row)
         while i < n:
             v = row[i]
             i += 1
-            if not ok[v]:
-                continue
             f = var_to_eq[v]
             if f == UNMATCHED:
                 if d == limit:
