@@ -76,7 +76,7 @@ def _walk(root: Element):
         stack.extend(reversed(list(el._children.values())))
 
 
-def _as_equations(items, where: str):
+def _as_equations(items):
     out = []
     stack = [items]
     while stack:
@@ -202,10 +202,6 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
         if not isinstance(el, Component):
             continue
         where = el.path or flat.name
-        for klass in type(el).__mro__:
-            own = vars(klass).get("equations")
-            if own is None or klass is Component:
-                continue
         # parents first, each class's own equations once
         for klass in reversed(type(el).__mro__):
             own = vars(klass).get("equations")
@@ -220,7 +216,7 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                                  f"{type(exc).__name__}: {exc}", path=where) from exc
             if klass is type(el):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
-            for k, item in enumerate(_as_equations(items, where)):
+            for k, item in enumerate(_as_equations(items)):
                 if isinstance(item, Connect):
                     connects.append((item, where))
                     continue
@@ -352,9 +348,6 @@ def _hint(port: Connector) -> str:
 
 def _key(p) -> int:
     return _sigkey(p.owner, p.name) if isinstance(p, SignalRef) else id(p)
-
-
-_sigkeys: dict[tuple[int, str], int] = {}
 
 
 def _sigkey(owner, name) -> int:

@@ -51,7 +51,7 @@ def _csr(expr: ca.SX, syms: ca.SX) -> list[list[int]]:
 
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
           syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
-          start_guess, hints: dict[str, str], state_priority=None) -> Lowered:
+          start_guess, hints: dict[str, str]) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
