@@ -1,5 +1,7 @@
 """Tests of `dummy_derivatives` and `state_selection`."""
 
+import random
+
 import pytest
 
 from mechatron.compiler.graph import (dummy_derivatives, maximum_matching, pantelides,
@@ -141,7 +143,8 @@ def test_select_returning_a_non_candidate_raises(inertias):
 
 def test_chain_of_rigid_inertias_keeps_one_state():
     n = 40
-    w, tau, dw = list(range(n)), list(range(n, 2 * n - 1)), list(range(2 * n - 1, 3 * n - 1))
+    w, tau = list(range(n)), list(range(n, 2 * n - 1))
+    dw = list(range(2 * n - 1, 3 * n - 1))
     adj = [[dw[k]] + ([tau[k - 1]] if k else []) + ([tau[k]] if k < n - 1 else [])
            for k in range(n)]
     adj += [[w[k], w[k + 1]] for k in range(n - 1)]
@@ -150,3 +153,37 @@ def test_chain_of_rigid_inertias_keeps_one_state():
     states = state_selection(ir, dummies)
     assert_square_and_matchable(ir, dummies, states)
     assert len(states) == 1
+
+
+def random_dae(rng):
+    """A random DAE with a transversal: equation i holds a member of family perm[i].
+
+    Each family is a chain x, der(x), ... of 1 to 3 variables given upfront.
+    """
+    n = rng.randint(1, 8)
+    chains, n_var, links = [], 0, []
+    for _ in range(n):
+        length = rng.randint(1, 3)
+        chain = list(range(n_var, n_var + length))
+        links += chain[1:] + [-1]
+        chains.append(chain)
+        n_var += length
+    perm = rng.sample(range(n), n)
+    adj = []
+    for i in range(n):
+        row = {rng.choice(chains[perm[i]])}
+        for _ in range(rng.randint(0, 2)):
+            row.add(rng.choice(rng.choice(chains)))
+        adj.append(sorted(row))
+    return n_var, adj, links
+
+
+@pytest.mark.parametrize("seed", range(200))
+def test_random_daes_reduce_to_square_systems(seed):
+    rng = random.Random(seed)
+    n_var, adj, links = random_dae(rng)
+    ir = pantelides(n_var, adj, links)
+    priority = [rng.random() for _ in range(n_var)] if seed % 2 else None
+    dummies = dummy_derivatives(ir, priority=priority)
+    states = state_selection(ir, dummies)
+    assert_square_and_matchable(ir, dummies, states)

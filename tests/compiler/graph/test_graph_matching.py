@@ -22,6 +22,30 @@ def assert_valid(matching, n_var, adj, allowed=None):
             assert matching.eq_to_var[e] == v
 
 
+def assert_maximum(matching, n_var, adj):
+    """Koenig certificate: a vertex cover as small as the matching proves it maximum.
+
+    Z is what alternating paths reach from the free equations; the cover is the
+    equations outside Z and the variables inside Z.
+    """
+    z_eqs = set(matching.unmatched_equations)
+    z_vars = set()
+    todo = list(z_eqs)
+    while todo:
+        for v in adj[todo.pop()]:
+            if v not in z_vars:
+                z_vars.add(v)
+                e = matching.var_to_eq[v]
+                assert e != -1, "augmenting path left"
+                if e not in z_eqs:
+                    z_eqs.add(e)
+                    todo.append(e)
+    for e, row in enumerate(adj):
+        for v in row:
+            assert e not in z_eqs or v in z_vars
+    assert (len(adj) - len(z_eqs)) + len(z_vars) == matching.size
+
+
 def reference_size(n_var, adj):
     """Maximum matching size by simple recursive augmenting paths (small graphs)."""
     var_to_eq = [-1] * n_var
@@ -109,3 +133,29 @@ def test_random_graphs_reach_maximum_size(seed):
     m = maximum_matching(n_var, adj)
     assert_valid(m, n_var, adj)
     assert m.size == reference_size(n_var, adj)
+    assert_maximum(m, n_var, adj)
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("start", ["default", "initial"])
+def test_large_random_graphs_are_maximum(seed, start):
+    # Big enough for the Karp-Sipser start (default), or forced through the plain
+    # greedy one (an empty initial matching).
+    rng = random.Random(seed)
+    n_eq = 3000
+    n_var = n_eq + rng.choice([-200, 0, 200])
+    adj = [rng.sample(range(n_var), rng.randint(1, 3)) for _ in range(n_eq)]
+    initial = Matching([-1] * n_eq, [-1] * n_var) if start == "initial" else None
+    m = maximum_matching(n_var, adj, initial=initial)
+    assert_valid(m, n_var, adj)
+    assert_maximum(m, n_var, adj)
+
+
+def test_allowed_variables_on_a_large_graph():
+    rng = random.Random(7)
+    n = 2000
+    adj = [rng.sample(range(n), 3) for _ in range(n)]
+    allowed = {v for v in range(n) if v % 3}
+    m = maximum_matching(n, adj, allowed=allowed)
+    assert_valid(m, n, adj, allowed)
+    assert_maximum(m, n, [[v for v in row if v in allowed] for row in adj])

@@ -18,7 +18,7 @@ from .matching import UNMATCHED, Matching, check_adjacency
 __all__ = ["Block", "strongly_connected_components", "block_lower_triangular"]
 
 
-@dataclass
+@dataclass(slots=True)
 class Block:
     """Equations solved together for as many variables.
 
@@ -88,7 +88,13 @@ def strongly_connected_components(n: int, succ: Sequence[Sequence[int]]) -> list
                 edges.pop()
                 if path and low[u] < low[path[-1]]:
                     low[path[-1]] = low[u]
-                if low[u] == index[u]:
+                if low[u] != index[u]:
+                    continue
+                if stack[-1] == u:  # the common case of a single node
+                    stack.pop()
+                    index[u] = done
+                    components.append([u])
+                else:
                     components.append(_pop_component(stack, index, u, done))
     return components
 
@@ -125,7 +131,8 @@ def block_lower_triangular(n_var: int, adj: Sequence[Sequence[int]],
                          f"expected ({len(adj)}, {n_var}).")
     succ = [[var_to_eq[v] for v in row if var_to_eq[v] != UNMATCHED]
             if eq_to_var[e] != UNMATCHED else [] for e, row in enumerate(adj)]
-    return [Block(equations=eqs, variables=[eq_to_var[e] for e in eqs])
+    partner = eq_to_var.__getitem__
+    return [Block(eqs, list(map(partner, eqs)))
             for eqs in strongly_connected_components(len(adj), succ)
             if eq_to_var[eqs[0]] != UNMATCHED]
 

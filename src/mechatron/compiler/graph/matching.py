@@ -18,7 +18,7 @@ and the dummy-derivative selection are built on it.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Sequence, Set as AbstractSet
 from dataclasses import dataclass
 
 __all__ = ["UNMATCHED", "Matching", "maximum_matching"]
@@ -62,7 +62,7 @@ class Matching:
 
 
 def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
-                     allowed: Sequence[bool] | Collection[int] | Callable[[int], bool]
+                     allowed: Sequence[bool] | AbstractSet[int] | Callable[[int], bool]
                      | None = None,
                      initial: Matching | None = None) -> Matching:
     """Match as many equations to distinct variables as possible.
@@ -75,7 +75,7 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
         ``adj[e]`` lists the variables of equation ``e``.
     allowed : sequence of bool, set of int or callable, optional
         Variables that may be matched: a mask of length `n_var` (a list or a numpy
-        array), a collection of variable indices, or a predicate ``allowed(v)``. Other
+        array), a set of variable indices, or a predicate ``allowed(v)``. Other
         variables are ignored, as if absent from `adj`. Default: all variables.
     initial : Matching, optional
         A valid matching to extend (it is copied, not modified). Every pair must be an
@@ -95,11 +95,11 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
     Notes
     -----
     Greedy start (first free variable of each equation); when that leaves more than 1 %
-    of the equations free, a Karp–Sipser start instead (pairs forced by a vertex of
-    degree one first, else the free variable of least degree). Then Hopcroft–Karp
-    phases: a breadth-first search layers the graph from the free equations, and
-    iterative depth-first searches augment along vertex-disjoint shortest paths. Cost
-    ``O(m sqrt(n))``.
+    of the nonempty equations free, a Karp–Sipser start instead (pairs forced by a
+    vertex of degree one first, else the free variable of least degree). Then
+    Hopcroft–Karp phases: a breadth-first search layers the graph from the free
+    equations, and iterative depth-first searches augment along vertex-disjoint
+    shortest paths. Cost ``O(m sqrt(n))``.
     """
     check_adjacency(n_var, adj)
     rows = adj
@@ -123,23 +123,23 @@ def check_adjacency(n_var: int, adj: Sequence[Sequence[int]]) -> None:
     """Raise `ValueError` if `adj` names a variable outside ``0 .. n_var - 1``."""
     if n_var < 0:
         raise ValueError(f"n_var must be >= 0, got {n_var}.")
-    rows = [row for row in adj if len(row)]
-    if not rows:
+    if not any(map(len, adj)):
         return
-    low = min(min(row) for row in rows)
-    high = max(max(row) for row in rows)
+    low = min(map(min, filter(len, adj)))
+    high = max(map(max, filter(len, adj)))
     if low < 0 or high >= n_var:
         bad = low if low < 0 else high
         raise ValueError(f"adj names variable {bad}, outside 0 .. {n_var - 1}.")
 
 
-def allowed_mask(n_var: int, allowed) -> list[bool]:
+def allowed_mask(n_var: int, allowed: Sequence[bool] | AbstractSet[int]
+                 | Callable[[int], bool] | None) -> list[bool]:
     """Turn the accepted forms of an ``allowed`` argument into a list of bool."""
     if allowed is None:
         return [True] * n_var
     if callable(allowed):
         return [bool(allowed(v)) for v in range(n_var)]
-    if isinstance(allowed, (set, frozenset, dict)):
+    if isinstance(allowed, AbstractSet):
         mask = [False] * n_var
         for v in allowed:
             if not 0 <= v < n_var:
@@ -256,7 +256,10 @@ def _copy_initial(initial: Matching, n_var: int,
 
 def _greedy(rows: Sequence[Sequence[int]], eq_to_var: list[int],
             var_to_eq: list[int]) -> int:
-    """Match each free equation to its first free variable; return the free count."""
+    """Match each free equation to its first free variable.
+
+    Returns the number of equations left free although they have variables.
+    """
     free = 0
     for e, row in enumerate(rows):
         if eq_to_var[e] != UNMATCHED:
@@ -267,7 +270,7 @@ def _greedy(rows: Sequence[Sequence[int]], eq_to_var: list[int],
                 var_to_eq[v] = e
                 break
         else:
-            free += 1
+            free += len(row) > 0
     return free
 
 

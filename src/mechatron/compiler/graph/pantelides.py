@@ -15,8 +15,9 @@ is the equation obtained by differentiating ``e`` (-1 if ``e`` was not), with th
 convention as ``var_to_diff``. The incidence of ``der(e)`` is every variable ``v`` of
 ``e`` together with ``der(v)`` (``v`` stays, as it may appear nonlinearly).
 
-Reference: C. C. Pantelides, "The consistent initialization of
-differential-algebraic systems", SIAM J. Sci. Stat. Comput. 9(2), 1988.
+References: C. C. Pantelides, "The consistent initialization of
+differential-algebraic systems", SIAM J. Sci. Stat. Comput. 9(2), 1988; J. D. Pryce,
+"A simple structural analysis method for DAEs", BIT 41(2), 2001.
 """
 
 from __future__ import annotations
@@ -125,8 +126,9 @@ def pantelides(n_var: int, adj: Sequence[Sequence[int]], var_to_diff: Sequence[i
     equation is left out, the equations that alternating paths reach from the
     unmatched ones (the over-determined part of the Dulmage–Mendelsohn decomposition)
     are reported. The criterion is necessary for termination, since the final matching
-    maps distinct equation families to distinct variable families; Pantelides (1988)
-    shows it is also sufficient, and `max_rounds` guards the rest.
+    maps distinct equation families to distinct variable families; it is also the
+    structural nonsingularity under which the method is known to terminate
+    (Pantelides, 1988; Pryce, 2001), and `max_rounds` guards the rest.
     """
     rows = _copy_adjacency(n_var, adj)
     var_to_diff = _checked_var_to_diff(n_var, var_to_diff)
