@@ -51,6 +51,7 @@ from mechatron.errors import MechatronError
 from mechatron.results import SUFFIXES as LOG_SUFFIXES
 from mechatron.results import SimResult
 from mechatron.solvers import METHODS as FIXED_STEP_METHODS
+from mechatron.solvers import SOLVERS
 
 __all__ = ["main", "build_parser", "DEMO_STEPS", "DemoStep", "DemoRun", "CommandError",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE"]
@@ -63,8 +64,8 @@ EXIT_USAGE = 2       # bad arguments or bad input (argparse's own code for usage
 COMPARE_POINTS = 1001
 
 #: Exceptions that mean "the input is wrong", not "Mechatron is wrong".
-USER_ERRORS = (MechatronError, ValueError, TypeError, FileNotFoundError, NotADirectoryError,
-               IsADirectoryError, PermissionError)
+USER_ERRORS = (MechatronError, ValueError, TypeError, FileNotFoundError, FileExistsError,
+               NotADirectoryError, IsADirectoryError, PermissionError)
 
 
 class CommandError(MechatronError, ValueError):
@@ -152,7 +153,9 @@ def _parse_sets(items: Sequence[str] | None, entry) -> dict[str, float | str]:
             raise CommandError(f"--set {item!r}: expected NAME=VALUE, e.g. --set R=7.5 or "
                                f"--set \"L=340 uH\".")
         if key not in entry.parameters:
-            close = difflib.get_close_matches(key, list(entry.parameters), 3)
+            close = [k for k in entry.parameters if k.lower() == key.lower()]
+            close += [k for k in difflib.get_close_matches(key, list(entry.parameters), 3)
+                      if k not in close]
             hint = f" Did you mean {', '.join(close)}?" if close else ""
             raise CommandError(f"--set {key}: model '{entry.name}' has no parameter "
                                f"'{key}'.{hint} Parameters: {', '.join(entry.parameters)} "
@@ -417,11 +420,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             ref = expected.get(label)
             row += ([_num(ref), f"{_relative(abs(final[label] - ref), abs(ref)):.1e}"]
                     if ref is not None else ["-", "-"])
-    _emit(_table(headers, rows, right="1"))
+    _emit(_table(headers, rows, right="145"))
     _emit("\nsolver profile:")
     _emit(_table(_PROFILE_HEADERS, _profile_rows({variant: res.stats}), right="2345678"))
+    if files:
+        _emit("")
     for kind, path in files.items():
-        _emit(f"\nwrote {path} ({'simulation log' if kind == 'out' else 'plot'})")
+        _emit(f"wrote {path} ({'simulation log' if kind == 'out' else 'plot'})")
     return EXIT_OK
 
 
@@ -582,10 +587,11 @@ def _demo_build(d: DemoRun) -> None:
     for v in d.variants:
         m = d.models[v] = d.entry.build(v)
         doc = (type(m).__doc__ or "").strip().splitlines()
+        summary = doc[0].rstrip(".") if doc else type(m).__name__
         parts = m.components
         what = (f"{len(parts)} components ({', '.join(parts)})" if parts else
-                "equations written by hand")
-        d.say(f"  {v:8s} {doc[0] if doc else type(m).__name__}: {what}")
+                "no components, equations only")
+        d.say(f"  {v}: {summary}; {what}")
 
 
 def _demo_compile(d: DemoRun) -> None:
@@ -751,7 +757,12 @@ DEMO_STEPS: list[DemoStep] = [
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    d = DemoRun(out=Path(args.out))
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CommandError(f"--out {out}: exists and is not a directory; give a directory "
+                           f"for the demo's plots and logs.")
+    out.mkdir(parents=True, exist_ok=True)  # fail now, not after the simulations
+    d = DemoRun(out=out)
     start = time.perf_counter()
     _emit(f"Mechatron {mt.__version__} demo")
     for k, step in enumerate(DEMO_STEPS, 1):
@@ -814,8 +825,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--t-stop", type=float, metavar="T", help="end time in s")
     _add_set(p)
     p.add_argument("--solver", metavar="S",
-                   help="auto, cvodes, idas, or a fixed-step method: "
-                        + ", ".join(FIXED_STEP_METHODS) + " (these need --dt)")
+                   help="one of " + ", ".join(SOLVERS) + "; the fixed-step ones ("
+                        + ", ".join(FIXED_STEP_METHODS) + ") need --dt "
+                        "(default: the model's experiment)")
     p.add_argument("--dt", type=float, metavar="H", help="step of a fixed-step solver, in s")
     p.add_argument("--rtol", type=float, metavar="R", help="relative tolerance")
     p.add_argument("--atol", type=float, metavar="A", help="absolute tolerance")

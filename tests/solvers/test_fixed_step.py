@@ -57,3 +57,18 @@ def test_fixed_step_agrees_with_variable_step():
     ref = mt.simulate(cm, 1.0, rtol=1e-12, atol=1e-14, t_out=np.linspace(0, 1, 101))
     fix = mt.simulate(cm, 1.0, solver="rk4", dt=1e-3, t_out=np.linspace(0, 1, 101))
     np.testing.assert_allclose(fix["c.v"], ref["c.v"], atol=1e-12)
+
+
+def test_long_runs_cross_chunk_boundaries_exactly():
+    from mechatron.solvers import fixed
+    cm = rc()
+    n = fixed.CHUNK * 2 + 7
+    res = mt.simulate(cm, n * 1e-4, solver="rk4", dt=1e-4)
+    assert res.stats.steps == n and len(res.t) == n + 1
+    np.testing.assert_allclose(res["c.v"], 1 - np.exp(-res.t), atol=1e-12)
+
+
+def test_parameters_set_by_path_are_range_checked():
+    cm = rc()
+    with pytest.raises(mt.errors.ParameterError, match=r"r.R must be >= 0, got -5"):
+        mt.simulate(cm, 1.0, params={"r.R": -5})

@@ -65,6 +65,7 @@ class CompiledModel:
     f_dist: ca.Function = None
     f_transition: ca.Function = None
     f_scales: ca.Function = None
+    param_bounds: list = field(default_factory=list)   # (min or None, max or None)
     report: dict = field(default_factory=dict)
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -104,9 +105,20 @@ class CompiledModel:
                                  f"Parameters: {', '.join(self.param_names[:12])}"
                                  f"{' ...' if len(self.param_names) > 12 else ''}.",
                                  path=self.name)
+        problems = []
         for key, value in params.items():
             i = index[key]
             p[i] = to_si(value, self.param_units[i], key)
+            low, high = self.param_bounds[i] if self.param_bounds else (None, None)
+            if p[i] != p[i]:
+                problems.append(f"{key} is NaN.")
+            if low is not None and p[i] < low:
+                problems.append(f"{key} must be >= {low:g}, got {p[i]:g}.")
+            if high is not None and p[i] > high:
+                problems.append(f"{key} must be <= {high:g}, got {p[i]:g}.")
+        if problems:
+            raise ParameterError(f"model '{self.name}': " + " ".join(problems),
+                                 problems=problems, path=self.name)
         return p
 
     # -- persistence ----------------------------------------------------------------------

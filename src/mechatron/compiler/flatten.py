@@ -30,6 +30,7 @@ class FlatParameter:
     unit: str
     doc: str
     owner: str
+    bounds: tuple = (None, None)
 
 
 @dataclass
@@ -160,7 +161,7 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
                     else:
                         _check_range(el, key, decl, value, problems)
                 flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
-                                                      owner_path)
+                                                      owner_path, (decl.min, decl.max))
             else:
                 kind = ("across" if isinstance(decl, Across) else
                         "through" if isinstance(decl, Through) else

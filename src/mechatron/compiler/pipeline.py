@@ -173,7 +173,7 @@ def compile_model(model: Component, *, name: str | None = None) -> CompiledModel
         x_start=np.array(state_starts, dtype=float), x_priority=state_prior,
         z_start=z_start, targets=targets, f_ode=f_ode, f_alg=f_alg, f_out=f_out,
         f_zero=f_zero, f_dist=f_dist, f_transition=f_transition, f_scales=f_scales,
-        report=report)
+        param_bounds=[q.bounds for q in params], report=report)
     timings["total"] = sum(timings.values())
     return cm
 

@@ -22,6 +22,8 @@ import numpy as np
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
 
+CHUNK = 2000   # steps per native fixed-step loop
+
 __all__ = ["METHODS", "ExplicitMethod", "ImplicitMethod", "make_step", "integrate_fixed"]
 
 
@@ -152,16 +154,23 @@ def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, 
         raise SimulationError(f"t_stop - t0 = {t_stop - t0:g} s is shorter than one step "
                               f"dt = {dt:g} s.")
     step = make_step(cm, method, dt, iterations)
-    key = ("run", method, float(dt), int(iterations), n)
-    run = cm._cache.get(key)
-    if run is None:
-        run = cm._cache[key] = step.mapaccum("run", n)
     times = t0 + dt * np.arange(n)
-    Xa0 = np.concatenate([X0, z0])
-    xs, ys = run(Xa0, ca.DM.zeros(0, n), np.repeat(p.reshape(-1, 1), n, axis=1),
-                 times.reshape(1, -1))
+    xa = np.concatenate([X0, z0])
+    ys = []
+    # native loops of at most CHUNK steps: building a mapaccum costs time growing with its
+    # length, so long runs reuse one chunk function (Python runs once per chunk, not step)
+    for start in range(0, n, CHUNK):
+        m = min(CHUNK, n - start)
+        key = ("run", method, float(dt), int(iterations), m)
+        run = cm._cache.get(key)
+        if run is None:
+            run = cm._cache[key] = step.mapaccum("run", m)
+        xs, y = run(xa, ca.DM.zeros(0, m), np.repeat(p.reshape(-1, 1), m, axis=1),
+                    times[start:start + m].reshape(1, -1))
+        xs = np.array(xs, dtype=float).reshape(-1, m)
+        xa = xs[:, -1]
+        ys.append(np.array(y, dtype=float).reshape(-1, m))
     y0 = np.array(cm.f_out(t0, X0, z0, p), dtype=float).reshape(-1, 1)
-    Y = np.hstack([y0, np.array(ys, dtype=float).reshape(-1, n)])
+    Y = np.hstack([y0] + ys)
     t = np.concatenate([[t0], t0 + dt * np.arange(1, n + 1)])
-    Xf = np.array(xs, dtype=float)[:, -1]
-    return t, Y, Xf
+    return t, Y, xa[:cm.nX]

@@ -77,11 +77,11 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     if solver in METHODS:
         t, Y, Xf = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p, method=solver,
                                    iterations=iterations)
+        n = len(t) - 1
         if t_out is not None:
             t_req = np.asarray(t_out, dtype=float)
             Y = np.vstack([np.interp(t_req, t, row) for row in Y])
             t = t_req
-        n = len(t) - 1
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
                             rhs_evals=n * _stages(solver), jac_evals=0)
     else:

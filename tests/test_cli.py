@@ -1,0 +1,257 @@
+"""Tests of the ``mechatron`` command, `mechatron.cli`: each command's output and files,
+checked against the physics of the DC motor, and every user error as one line, exit 2."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechatron as mt
+from mechatron.cli import DEMO_STEPS, main
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+ENTRY = mt.models.get("dc_motor")
+P = ENTRY.values()
+W_FINAL = P["k"] * P["V"] / (P["R"] * P["B"] + P["k"] ** 2)   # analytic final speed
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def run_json(capsys, *argv: str) -> dict:
+    code, out, err = run(capsys, *argv, "--json")
+    assert code == 0, err
+    return json.loads(out)
+
+
+# ---------------------------------------------------------------------------- models, show
+def test_models_json_lists_dc_motor(capsys):
+    data = run_json(capsys, "models")
+    names = [m["name"] for m in data["models"]]
+    assert "dc_motor" in names
+    motor = data["models"][names.index("dc_motor")]
+    assert motor["variants"] == ["acausal", "ode"]
+    assert motor["description"]
+
+
+def test_models_human_and_tag_filter(capsys):
+    code, out, _ = run(capsys, "models", "--tag", "motor")
+    assert code == 0
+    assert "dc_motor" in out and "acausal, ode" in out
+
+
+def test_models_unknown_tag_is_an_error(capsys):
+    code, out, err = run(capsys, "models", "--tag", "no-such-tag")
+    assert code == 2 and out == ""
+    assert err.startswith("error: --tag no-such-tag") and "motor" in err
+
+
+def test_show_lists_parameters_variants_outputs(capsys):
+    code, out, _ = run(capsys, "show", "dc_motor")
+    assert code == 0
+    for text in ("Armature inductance", "0.0003408", "seed table 6-1", "acausal (default)",
+                 "inertia.w", "inductor.i", "t_stop 0.5 s", "rtol 1e-08", "122.4398781"):
+        assert text in out
+
+
+def test_show_json(capsys):
+    data = run_json(capsys, "show", "dc_motor")
+    assert data["parameters"]["L"] == {"default": 3.408e-4, "unit": "H",
+                                       "description": "Armature inductance",
+                                       "source": "seed table 6-1, calculated"}
+    assert data["outputs"]["w"] == {"unit": "rad/s",
+                                    "paths": {"acausal": "inertia.w", "ode": "w"}}
+    assert data["experiment"]["t_stop"] == 0.5
+    assert data["expected"]["w"] == pytest.approx(W_FINAL, rel=1e-12)
+
+
+# ------------------------------------------------------------------------------- simulate
+@pytest.mark.parametrize("variant", ["acausal", "ode"])
+def test_simulate_json_final_speed_is_analytic(capsys, variant):
+    data = run_json(capsys, "simulate", "dc_motor", "--variant", variant)
+    assert data["model"] == "dc_motor" and data["variant"] == variant
+    assert data["t_stop"] == 0.5 and data["solver"] == ENTRY.experiment.solver
+    assert data["outputs"] == ENTRY.outputs[variant]
+    assert data["final"]["w"] == pytest.approx(W_FINAL, rel=1e-5)
+    stats = data["stats"]
+    assert stats["steps"] > 0 and stats["rhs_evals"] >= stats["steps"]
+    assert stats["compile_time"] > 0
+    assert data["files"] == {}
+
+
+def test_simulate_human_summary(capsys):
+    code, out, err = run(capsys, "simulate", "dc_motor")
+    assert code == 0, err
+    assert "122.4398781" in out and "rad/s" in out
+    for word in ("steps", "rejected", "rhs evals", "jac evals", "events", "wall time",
+                 "compile time"):
+        assert word in out
+
+
+def test_set_with_unit_changes_the_parameter(capsys):
+    # L only shapes the transient: with a shorter horizon w(t) depends on it. R changes
+    # the steady state: w_final = k V / (R B + k^2).
+    base = run_json(capsys, "simulate", "dc_motor", "--t-stop", "2e-4")
+    big_l = run_json(capsys, "simulate", "dc_motor", "--t-stop", "2e-4",
+                     "--set", "L=3408 uH")
+    assert big_l["parameters"]["L"] == pytest.approx(3.408e-3, rel=1e-12)
+    assert big_l["set"] == {"L": "3408 uH"}
+    assert big_l["final"]["i"] < 0.5 * base["final"]["i"]   # 10x L: current rises slower
+
+    data = run_json(capsys, "simulate", "dc_motor", "--set", "L=340 uH", "--set", "R=7.5")
+    assert data["parameters"]["L"] == pytest.approx(3.4e-4, rel=1e-12)
+    assert data["parameters"]["R"] == 7.5
+    w_final = P["k"] * P["V"] / (7.5 * P["B"] + P["k"] ** 2)
+    assert data["final"]["w"] == pytest.approx(w_final, rel=1e-5)
+    assert data["expected"] == {}   # reference values hold for the default run only
+
+
+def test_out_csv_has_t_then_paths(capsys, tmp_path):
+    path = tmp_path / "log.csv"
+    data = run_json(capsys, "simulate", "dc_motor", "--variant", "ode", "--out", str(path))
+    assert data["files"] == {"out": str(path)}
+    with open(path, newline="") as fh:
+        header = next(csv.reader(fh))
+    assert header[0] == "t" and set(header[1:]) == {"i", "w"}
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    assert table[0, 0] == 0.0 and table[-1, 0] == pytest.approx(0.5)
+    assert table[-1, header.index("w")] == pytest.approx(W_FINAL, rel=1e-5)
+
+
+def test_out_parquet_round_trips(capsys, tmp_path):
+    path = tmp_path / "log.parquet"
+    data = run_json(capsys, "simulate", "dc_motor", "--out", str(path))
+    res = mt.SimResult.load(path)
+    assert res.final("inertia.w") == data["final"]["w"]
+    assert res.units["inertia.w"] == "rad/s"
+
+
+def test_plot_writes_png(capsys, tmp_path):
+    path = tmp_path / "motor.png"
+    code, out, err = run(capsys, "simulate", "dc_motor", "--plot", str(path))
+    assert code == 0, err
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert str(path) in out
+
+
+def test_fixed_step_solver(capsys):
+    data = run_json(capsys, "simulate", "dc_motor", "--variant", "ode", "--solver", "rk4",
+                    "--dt", "1e-5", "--t-stop", "0.05")
+    assert data["dt"] == 1e-5 and data["stats"]["solver"] == "rk4"
+    assert data["stats"]["steps"] == 5000
+    assert data["final"]["w"] == pytest.approx(W_FINAL, rel=1e-4)
+
+
+# -------------------------------------------------------------------------- user errors
+@pytest.mark.parametrize("argv, names", [
+    (["simulate", "no_such_model"], ["no_such_model"]),
+    (["show", "dc_moter"], ["dc_moter", "dc_motor"]),
+    (["simulate", "dc_motor", "--set", "R=3 kg"], ["R", "3 kg"]),
+    (["simulate", "dc_motor", "--set", "Q=3"], ["Q"]),
+    (["simulate", "dc_motor", "--set", "r=3"], ["r", "Did you mean R?"]),
+    (["simulate", "dc_motor", "--set", "R=-5"], ["R", "-5"]),
+    (["simulate", "dc_motor", "--variant", "ode", "--set", "R=-5"], ["R", "-5"]),
+    (["simulate", "dc_motor", "--set", "R"], ["R", "NAME=VALUE"]),
+    (["simulate", "dc_motor", "--set", "R=nan"], ["R", "nan"]),
+    (["simulate", "dc_motor", "--variant", "bond_graph"], ["bond_graph", "acausal"]),
+    (["simulate", "dc_motor", "--solver", "rk4"], ["rk4", "--dt"]),
+    (["simulate", "dc_motor", "--dt", "1e-3"], ["--dt"]),
+    (["simulate", "dc_motor", "--solver", "magic"], ["magic"]),
+    (["simulate", "dc_motor", "--t-stop", "-1"], ["t_stop"]),
+    (["simulate", "dc_motor", "--out", "log.txt"], ["--out", ".txt"]),
+    (["simulate", "dc_motor", "--out", "no/such/dir/log.csv"], ["--out", "no/such/dir"]),
+])
+def test_user_error_is_one_line_exit_2(capsys, argv, names):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    assert err.startswith("error: ") and err.count("\n") == 1
+    assert "Traceback" not in err
+    for name in names:
+        assert name in err
+
+
+def test_argparse_errors_exit_2(capsys):
+    assert run(capsys, "no-such-command")[0] == 2
+    assert run(capsys, "simulate", "dc_motor", "--t-stop", "soon")[0] == 2
+    assert run(capsys)[0] == 2
+
+
+def test_unexpected_error_exit_1_without_traceback(capsys, monkeypatch):
+    def broken(name):
+        raise RuntimeError("disk on fire")
+
+    monkeypatch.setattr(mt.models, "get", broken)
+    monkeypatch.delenv("MECHATRON_DEBUG", raising=False)
+    code, _, err = run(capsys, "show", "dc_motor")
+    assert code == 1
+    assert err.startswith("error: unexpected RuntimeError: disk on fire")
+    assert "Traceback" not in err
+
+    monkeypatch.setenv("MECHATRON_DEBUG", "1")
+    code, _, err = run(capsys, "show", "dc_motor")
+    assert code == 1 and "Traceback" in err
+
+
+def test_help_of_every_command(capsys):
+    for argv in ([], ["models"], ["show"], ["simulate"], ["compare"], ["demo"]):
+        code, out, _ = run(capsys, *argv, "--help")
+        assert code == 0 and out.startswith("usage: mechatron")
+
+
+def test_module_help_in_subprocess():
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(SRC), *filter(None, [os.environ.get("PYTHONPATH")])]))
+    proc = subprocess.run([sys.executable, "-m", "mechatron.cli", "--help"], env=env,
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    for command in ("models", "show", "simulate", "compare", "demo"):
+        assert command in proc.stdout
+
+
+# -------------------------------------------------------------------------------- compare
+def test_compare_variants_agree(capsys, tmp_path):
+    path = tmp_path / "compare.png"
+    code, out, err = run(capsys, "compare", "dc_motor", "--out", str(path))
+    assert code == 0, err
+    assert "ode" in out and "acausal" in out
+    section = out.split("largest deviation")[1].split("\n\n")[0]
+    rows = [line.split() for line in section.splitlines() if line.split()[:1] == ["ode"]]
+    assert {r[1] for r in rows} == {"w", "i"}
+    assert all(float(r[-1]) < 1e-6 for r in rows)            # max relative deviation
+    assert path.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_compare_json(capsys):
+    data = run_json(capsys, "compare", "dc_motor")
+    assert data["reference"] == "acausal" and data["variants"] == ["acausal", "ode"]
+    assert data["points"] == 1001
+    for label in ("w", "i"):
+        assert data["deviations"]["ode"][label]["max_rel"] < 1e-6
+    assert data["final"]["ode"]["w"] == pytest.approx(W_FINAL, rel=1e-5)
+
+
+# ----------------------------------------------------------------------------------- demo
+def test_demo_writes_plots_and_logs(capsys, tmp_path):
+    out_dir = tmp_path / "demo"
+    code, out, err = run(capsys, "demo", "--out", str(out_dir))
+    assert code == 0, out + err
+    assert f"{len(DEMO_STEPS)}/{len(DEMO_STEPS)}" in out
+    assert "checks passed" in out and "FAILED" not in out
+    pngs = sorted(out_dir.glob("*.png"))
+    csvs = sorted(out_dir.glob("*.csv"))
+    assert pngs and csvs
+    assert all(p.read_bytes()[:4] == b"\x89PNG" for p in pngs)
+    log = mt.SimResult.load(out_dir / "dc_motor_acausal.csv")
+    assert log.final("inertia.w") == pytest.approx(W_FINAL, rel=1e-8)
