@@ -75,8 +75,9 @@ def profiled(fn):
 
     ``where`` names the few native calls that dominate ``mt.simulate`` (cumulative seconds,
     overlapping): the solver call with the conversion of its state trajectory
-    (``integrate_variable``), the construction of the mapped output function
-    (``casadi.Function.map``), every conversion of a ``casadi.DM`` to NumPy
+    (``integrate_variable``), the CasADi integrator call alone (``solver_call_s``: the
+    ``casadi.Function.__call__`` made by ``integrate_variable``), the construction of the
+    mapped output function (``casadi.Function.map``), every conversion of a ``casadi.DM`` to NumPy
     (``numpy.array`` on a DM goes through a Python list of floats), and the consistent
     initialization. Only a few hundred Python calls are profiled, so the overhead is
     negligible next to these.
@@ -103,7 +104,19 @@ def profiled(fn):
                 total += ct
         return total
 
+    def called_from(name: str, caller: str) -> float:
+        """Cumulative seconds of the Python-level function ``name`` called by ``caller``."""
+        total = 0.0
+        for (_, _, func), (_, _, _, _, callers) in stats.items():
+            if func != name:
+                continue
+            for (_, _, cfunc), (_, _, _, ct) in callers.items():
+                if cfunc == caller:
+                    total += ct
+        return total
+
     where = {"integrate_variable_s": cum("integrate_variable"),
+             "solver_call_s": called_from("__call__", "integrate_variable"),
              "initialize_s": cum("initialize"),
              "casadi_Function_map_s": cum("casadi._casadi.Function_map", builtin=True),
              "casadi_Function_call_s": cum("casadi._casadi.Function_call", builtin=True),
@@ -111,27 +124,58 @@ def profiled(fn):
     return out, seconds, where
 
 
-def logging_by_buffer(cm, grid, X, Z, p):
+CHUNK = 64   # output points per mapped evaluation in logging_by_buffer
+
+
+def logging_by_buffer(cm, grid, X, Z, p, chunk: int = CHUNK):
     """Seconds to evaluate every logged variable at every output point into NumPy with
-    CasADi's buffer interface (no ``casadi.DM`` round trip): the alternative measured
-    against what ``mt.simulate`` does. Returns ``(Y, seconds)``; ``Y`` is n_vars x n_t."""
+    CasADi's buffer interface: ``cm.f_out.map(chunk, "serial")`` evaluated on views of
+    column-major NumPy arrays, chunk after chunk. No ``casadi.DM`` round trip, and the
+    mapped function has ``chunk`` columns, not one per output point (building a ``Map``
+    costs time proportional to its output size). This is the alternative measured against
+    what ``mt.simulate`` does. Returns ``(Y, seconds)``, ``Y`` of shape (number of logged
+    variables, number of points)."""
     import numpy as np
 
     start = time.perf_counter()
-    n = grid.size
-    fmap = cm.f_out.map(n, "serial")
-    buf, evaluate = fmap.buffer()
-    args = [np.ascontiguousarray(grid, dtype=float),
-            np.asfortranarray(X, dtype=float).ravel(order="F"),
-            np.asfortranarray(Z, dtype=float).ravel(order="F"),
-            np.repeat(np.asarray(p, dtype=float).reshape(-1, 1), n, 1).ravel(order="F")]
-    for k, a in enumerate(args):
-        buf.set_arg(k, memoryview(a))
-    out = np.empty(fmap.nnz_out(0))
-    buf.set_res(0, memoryview(out))
-    evaluate()
-    Y = out.reshape(n, -1).T
-    return Y, time.perf_counter() - start
+    n, n_y = grid.size, cm.f_out.nnz_out(0)
+    nx, nz = X.shape[0], Z.shape[0]
+    t = np.ascontiguousarray(grid, dtype=float)
+    Xf = np.asarray(X, dtype=float).ravel(order="F")     # point k: Xf[k*nx:(k+1)*nx]
+    Zf = np.asarray(Z, dtype=float).ravel(order="F")
+    pv = np.asarray(p, dtype=float)
+    out = np.empty(n_y * n)
+    mapped = {}
+    for k in range(0, n, chunk):
+        m = min(chunk, n - k)
+        if m not in mapped:
+            f = cm.f_out.map(m, "serial")
+            buf, evaluate = f.buffer()
+            mapped[m] = (f, buf, evaluate, np.tile(pv, m))
+        _, buf, evaluate, pm = mapped[m]
+        buf.set_arg(0, memoryview(t[k:k + m]))
+        buf.set_arg(1, memoryview(Xf[k * nx:(k + m) * nx]))
+        buf.set_arg(2, memoryview(Zf[k * nz:(k + m) * nz]))
+        buf.set_arg(3, memoryview(pm))
+        buf.set_res(0, memoryview(out[k * n_y:(k + m) * n_y]))
+        evaluate()
+    return out.reshape(n, n_y).T, time.perf_counter() - start
+
+
+def logging_alternative(cm, res, grid) -> dict | None:
+    """Evaluate every logged variable with CasADi's buffer interface instead (see
+    ``logging_by_buffer``) and check that it gives the same numbers."""
+    import numpy as np
+
+    logged = set(res.names)
+    if cm.nX != cm.nx or not logged.issuperset(cm.state_names + cm.alg_names):
+        return None   # modes of relations, or states not logged under their names
+    X = np.array([res[n] for n in cm.state_names]).reshape(cm.nx, grid.size)
+    Z = np.array([res[n] for n in cm.alg_names]).reshape(cm.nz, grid.size)
+    Y, seconds = logging_by_buffer(cm, grid, X, Z, cm.p0)
+    sample = range(0, len(cm.names), max(1, len(cm.names) // 200))
+    diff = max(float(np.max(np.abs(Y[i] - res[cm.names[i]]))) for i in sample)
+    return {"seconds": seconds, "max_abs_diff_vs_simulate": diff}
 
 
 def environment() -> dict:

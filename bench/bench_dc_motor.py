@@ -19,7 +19,7 @@ Run: ``python bench/bench_dc_motor.py [--quick]``; prints one JSON document.
 from __future__ import annotations
 
 import _common  # noqa: F401  (import path)
-from _common import clock, log, main, ratio, repeat, summary
+from _common import clock, log, logging_alternative, main, profiled, ratio, repeat, summary
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -66,7 +66,7 @@ def _scipy_runs(P: dict, t_out: np.ndarray, n: int) -> dict:
 
 
 def _integrator_only(cm, t_out, n: int) -> dict | None:
-    """The CasADi integrator call alone (no initialization, no logging), via internals."""
+    """``integrate_variable`` alone (no initialization, no logging), via internals."""
     try:
         from mechatron.solvers.initial import initialize
         from mechatron.solvers.variable import integrate_variable
@@ -113,6 +113,8 @@ def run(quick: bool = False) -> dict:
     log(f"dc_motor mechatron simulate: first {first * 1e3:.2f} ms, "
         f"median {mech['median_s'] * 1e3:.2f} ms")
     integ = _integrator_only(cm, t_out, n_rep)
+    _, t_prof, where = profiled(sim)
+    alternative = logging_alternative(cm, res, t_out)
 
     scipy_res = _scipy_runs(P, t_out, n_rep)
 
@@ -148,6 +150,8 @@ def run(quick: bool = False) -> dict:
             "first_call_s": first,
             "simulate": mech,
             "integrator_only": integ,
+            "profiled_call": {"seconds": t_prof, **where},
+            "logging_by_buffer": alternative,
             "stats": {"solver": stats.solver, "steps": stats.steps,
                       "rejected_steps": stats.rejected_steps, "rhs_evals": stats.rhs_evals,
                       "jac_evals": stats.jac_evals, "wall_time_s": stats.wall_time},
@@ -156,8 +160,13 @@ def run(quick: bool = False) -> dict:
         "scipy": baselines,
         "notes": ["ratio = SciPy median time / Mechatron median simulate time (first call "
                   "excluded); > 1 means Mechatron is faster.",
-                  "integrator_only: the CasADi CVODES call alone, without initialization and "
-                  "without evaluating the logged variables (measured through internals)."],
+                  "integrator_only: mechatron.solvers.variable.integrate_variable alone (the "
+                  "CVODES run and the conversion of its states to NumPy), without "
+                  "initialization and without evaluating the logged variables.",
+                  "profiled_call: one more simulate call under cProfile; cumulative seconds of "
+                  "the dominant native calls (they overlap).",
+                  "logging_by_buffer: every logged variable evaluated with "
+                  "casadi.Function.buffer into NumPy instead, for comparison."],
     }
 
 

@@ -14,8 +14,9 @@ Two models built with ``mt.System`` for N = 10, 100, 1000, 10000:
 For each: time to build the instance, compile time (wall clock, and per pass from
 ``report["timings"]``), equation and variable counts before/after, number of states, and
 the wall time of ``mt.simulate`` over 1 s with CVODES (first call, which builds the
-integrator, and a second call). The growth exponent ``a`` of ``t ~ N**a`` is fitted
-between successive N.
+integrator, and a second call, profiled to show where the time goes; the largest size
+runs once, and N = 10000 logs 101 output points instead of 1001). The growth exponent
+``a`` of ``t ~ N**a`` is fitted between successive N.
 
 The SciPy baseline integrates the RC ladder written by hand as a tridiagonal linear ODE
 ``C v' = (tridiagonal Laplacian) v / R + source`` with ``solve_ivp(method="BDF")`` and the
@@ -27,9 +28,10 @@ constant sparse Jacobian, same tolerances and output points.
 from __future__ import annotations
 
 import gc
+import time
 
 import _common  # noqa: F401  (import path)
-from _common import (clock, growth_exponent, log, logging_by_buffer, main, profiled,
+from _common import (clock, growth_exponent, log, logging_alternative, main, profiled,
                      ratio, repeat, summary)
 
 import numpy as np
@@ -122,28 +124,33 @@ def _grid(n: int) -> np.ndarray:
     return np.linspace(0.0, T_STOP, N_OUT if n < 10000 else N_OUT_LARGE)
 
 
-def _logging_alternative(cm, res, grid) -> dict | None:
-    """Evaluate every logged variable with CasADi's buffer interface instead (see
-    ``_common.logging_by_buffer``) and check that it gives the same numbers."""
-    if cm.nX != cm.nx or any(n not in res.names for n in cm.state_names + cm.alg_names):
-        return None
-    X = np.array([res[n] for n in cm.state_names]).reshape(cm.nx, grid.size)
-    Z = np.array([res[n] for n in cm.alg_names]).reshape(cm.nz, grid.size)
-    Y, seconds = logging_by_buffer(cm, grid, X, Z, cm.p0)
-    sample = range(0, len(cm.names), max(1, len(cm.names) // 200))
-    diff = max(float(np.max(np.abs(Y[i] - res[cm.names[i]]))) for i in sample)
-    return {"seconds": seconds, "max_abs_diff_vs_simulate": diff}
+def _compile_repeats(n: int, quick: bool) -> int:
+    if n <= 100:
+        return 3 if quick else 5
+    return 1 if quick or n >= 10000 else 3
 
 
-def measure(kind: str, n: int, *, simulate_twice: bool = True) -> dict:
+def measure(kind: str, n: int, *, simulate_twice: bool = True, compiles: int = 1) -> dict:
+    """Build and compile ``compiles`` times (fresh instance each), keep the run with the
+    median wall time, and simulate its compiled model."""
     build, observed = MODELS[kind]
-    model, t_build = clock(build, n)
-    cm, t_compile = clock(mt.compile_model, model)
+    runs = []
+    for _ in range(compiles):
+        gc.collect()
+        model, t_build = clock(build, n)
+        cpu = time.process_time()
+        cm, t_compile = clock(mt.compile_model, model)
+        runs.append((t_compile, time.process_time() - cpu, t_build, cm))
+        del model
+    runs.sort(key=lambda r: r[0])
+    t_compile, cpu_compile, t_build, cm = runs[len(runs) // 2]
     rep = cm.report
-    log(f"{kind} N={n}: compile {t_compile:.3f} s "
-        f"({', '.join(f'{k} {v:.3f}' for k, v in rep.get('timings', {}).items())})")
+    log(f"{kind} N={n}: compile {t_compile:.3f} s (cpu {cpu_compile:.3f} s; "
+        f"{', '.join(f'{k} {v:.3f}' for k, v in rep.get('timings', {}).items())})")
     grid = _grid(n)
     row = {"N": n, "build_s": t_build, "compile_s": t_compile,
+           "compile_cpu_s": cpu_compile, "compile_min_s": runs[0][0],
+           "compile_repeats": len(runs),
            "passes_s": dict(rep.get("timings", {})),
            "equations": rep.get("equations"), "variables": rep.get("variables"),
            "n_states": len(cm.state_names), "aliases_eliminated": rep.get("aliases_eliminated"),
@@ -159,7 +166,7 @@ def measure(kind: str, n: int, *, simulate_twice: bool = True) -> dict:
     else:
         res, row["simulate_first_s"], where = profiled(sim)
     row["simulate_profile_s"] = where
-    row["logging_by_buffer"] = _logging_alternative(cm, res, grid)
+    row["logging_by_buffer"] = logging_alternative(cm, res, grid)
     st = res.stats
     row["solver_stats"] = {"solver": st.solver, "steps": st.steps,
                            "rejected_steps": st.rejected_steps, "rhs_evals": st.rhs_evals,
@@ -167,18 +174,23 @@ def measure(kind: str, n: int, *, simulate_twice: bool = True) -> dict:
     final = np.array([res[name][-1] for name in observed(n)])
     log(f"{kind} N={n}: simulate first {row['simulate_first_s']:.3f} s"
         + (f", second {row['simulate_second_s']:.3f} s" if simulate_twice else "")
-        + f"; integrate_variable {where['integrate_variable_s']:.3f} s, "
+        + f"; integrate_variable {where['integrate_variable_s']:.3f} s "
+          f"(CVODES call {where['solver_call_s']:.3f} s), "
           f"Function.map {where['casadi_Function_map_s']:.3f} s, "
           f"DM->numpy {where['dm_to_numpy_s']:.3f} s")
     return row, final, grid
 
 
-def _exponents(rows: list[dict], key) -> list[dict]:
+def _exponents(rows: list[dict], key, same_grid: bool = False) -> list[dict]:
+    """Growth exponents between successive rows; with ``same_grid``, only between rows
+    that logged the same number of output points (None otherwise)."""
     out = []
     for a, b in zip(rows, rows[1:]):
         ta, tb = key(a), key(b)
+        comparable = not same_grid or a["output_points"] == b["output_points"]
         out.append({"from_N": a["N"], "to_N": b["N"],
-                    "exponent": growth_exponent(a["N"], ta, b["N"], tb)})
+                    "exponent": growth_exponent(a["N"], ta, b["N"], tb)
+                    if comparable else None})
     return out
 
 
@@ -198,7 +210,8 @@ def run(quick: bool = False) -> dict:
         rows = []
         for n in sizes:
             gc.collect()
-            row, final, grid = measure(kind, n, simulate_twice=n < 10000)
+            row, final, grid = measure(kind, n, simulate_twice=n < (1000 if quick else 10000),
+                                       compiles=_compile_repeats(n, quick))
             if kind == "rc_ladder":
                 base = scipy_rc_ladder(n, grid, repeats=3 if n <= 100 else 1)
                 mech = row.get("simulate_second_s", row["simulate_first_s"])
@@ -210,11 +223,15 @@ def run(quick: bool = False) -> dict:
                     "ratio_scipy_over_mechatron_integrate_variable":
                         ratio(base["time"]["median_s"],
                               row["simulate_profile_s"]["integrate_variable_s"]),
+                    "ratio_scipy_over_mechatron_solver_call":
+                        ratio(base["time"]["median_s"],
+                              row["simulate_profile_s"]["solver_call_s"]),
                     "max_abs_diff_final_v": float(np.max(np.abs(final - base["final"]))),
                 }
                 log(f"rc_ladder N={n}: scipy BDF {base['time']['median_s']:.3f} s")
             rows.append(row)
         goals = {str(n): {"goal_s": GOALS[n], "compile_s": r["compile_s"],
+                          "compile_cpu_s": r["compile_cpu_s"],
                           "met": r["compile_s"] < GOALS[n]}
                  for r in rows for n in [r["N"]] if n in GOALS}
         passes = sorted({k for r in rows for k in r["passes_s"] if k != "total"})
@@ -226,15 +243,23 @@ def run(quick: bool = False) -> dict:
                 "per_pass": {p: _exponents(rows, lambda r, p=p: r["passes_s"].get(p))
                              for p in passes},
                 "simulate": _exponents(rows, lambda r: r.get("simulate_second_s",
-                                                             r["simulate_first_s"])),
+                                                             r["simulate_first_s"]),
+                                       same_grid=True),
                 "integrate_variable": _exponents(
-                    rows, lambda r: r["simulate_profile_s"]["integrate_variable_s"]),
+                    rows, lambda r: r["simulate_profile_s"]["integrate_variable_s"],
+                    same_grid=True),
+                "solver_call": _exponents(
+                    rows, lambda r: r["simulate_profile_s"]["solver_call_s"]),
             },
         }
     out["notes"] = [
-        "Timings are wall clock on a shared machine (see environment.load_average).",
-        f"N = 10000 logs {N_OUT_LARGE} output points instead of {N_OUT} and simulates once "
-        "(first call only); its simulate time is therefore not comparable row to row.",
+        "Timings are wall clock on a shared machine (see environment.load_average); "
+        "compile_cpu_s is the process CPU time of the same compile, less sensitive to "
+        "other load. compile_s is the median of compile_repeats fresh builds, and the "
+        "row's other compile figures come from that run.",
+        f"N = 10000 logs {N_OUT_LARGE} output points instead of {N_OUT}, so its simulate "
+        "time is not comparable row to row. The largest size (N = 1000 with --quick) "
+        "simulates once: simulate_first_s only, which includes building the integrator.",
         "simulate_* is mt.simulate on the compiled model (initialization, integration, "
         "evaluation of every logged variable at every output point). simulate_profile_s "
         "splits the profiled call (the second, or the only one): integrate_variable_s is "

@@ -79,3 +79,19 @@ def test_pulse_source_edges_are_events():
         v_c = 1 + (v_c - 1) * np.exp(-0.25e-3 / tau)
         v_c = v_c * np.exp(-0.75e-3 / tau)
     assert abs(res.final("c.v") - v_c) < 1e-7
+
+
+def test_sundials_solvers_refuse_models_with_events_instead_of_missing_them():
+    with pytest.raises(mt.errors.SimulationError, match=r"cannot locate the events of .*d.*"
+                                                        r"rosenbrock"):
+        mt.simulate(rectifier(), 0.01, solver="cvodes")
+
+
+def test_logged_values_equal_a_direct_evaluation_across_chunks():
+    from mechatron.solvers.logging import CHUNK
+    cm = mt.compile_model(rectifier())
+    t = np.linspace(0, 1 / F, 3 * CHUNK + 5)
+    res = mt.simulate(cm, 1 / F, rtol=1e-10, atol=1e-12, t_out=t)
+    vs = A * np.sin(2 * np.pi * F * res.t)
+    np.testing.assert_allclose(res["sine.y"], vs, atol=1e-12)
+    np.testing.assert_allclose(res["src.v"], vs, atol=1e-12)

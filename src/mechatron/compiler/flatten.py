@@ -49,7 +49,7 @@ class FlatVariable:
 @dataclass
 class FlatEquation:
     residual: ca.SX
-    origin: str        # "r1: v == R*i" or "connect(r1.n, c1.p)"
+    origin: object     # "r1: v == R*i" or "connect(r1.n, c1.p)"; str() formats it
     owner: str = ""    # path of the component the equation belongs to
 
 
@@ -70,11 +70,30 @@ class FlatModel:
 
 
 def _walk(root: Element):
+    """Every element, parents first; each one's path is cached for the build."""
+    root._path_cache = ""
     stack = [root]
     while stack:
         el = stack.pop()
         yield el
-        stack.extend(reversed(list(el._children.values())))
+        children = list(el._children.values())
+        for child in children:
+            child._path_cache = _join(el._path_cache, child._name)
+        stack.extend(reversed(children))
+
+
+class _Origin:
+    """Where an equation comes from; formatted only when a message needs it."""
+
+    __slots__ = ("where", "lhs", "rhs")
+
+    def __init__(self, where, lhs, rhs):
+        self.where, self.lhs, self.rhs = where, lhs, rhs
+
+    def __str__(self) -> str:
+        return f"{self.where}: {_short(self.lhs)} == {_short(self.rhs)}"
+
+    __repr__ = __str__
 
 
 def _as_equations(items):
@@ -116,6 +135,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     finally:
         for el in elements:
             el._syms = None
+            el._path_cache = None
     if problems:
         kind = UnitError if all("expected a value in" in p for p in problems) else None
         if kind is None and any(p.startswith("cannot connect") for p in problems):
@@ -222,6 +242,12 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                     connects.append((item, where))
                     continue
                 _add_equation(flat, el, klass, k, item, problems)
+    pending = [eq for eq in flat.equations if eq.residual is None]
+    if pending:
+        res = ca.vertcat(*[eq.origin.lhs for eq in pending]) - \
+            ca.vertcat(*[eq.origin.rhs for eq in pending])
+        for eq, r in zip(pending, ca.vertsplit(res)):
+            eq.residual = r
     return connects
 
 
@@ -232,16 +258,17 @@ def _add_equation(flat, el, klass, k, item, problems) -> None:
                         f"{item!r}, not an equation. Write equations with == between "
                         "expressions of variables.")
         return
-    item = ca.SX(item)
+    if not isinstance(item, ca.SX):
+        item = ca.SX(item)
     for j in range(item.numel()):
-        e = item[j]
+        e = item if item.is_scalar() else item[j]
         if not e.is_op(ca.OP_EQ):
             problems.append(f"{el.describe()}: equation {k + 1} of {klass.__name__} is not "
                             f"an equation ({str(e)[:60]}). Write it with ==.")
             continue
         lhs, rhs = e.dep(0), e.dep(1)
-        flat.equations.append(FlatEquation(lhs - rhs, f"{where}: {_short(lhs)} == "
-                                                      f"{_short(rhs)}", el.path))
+        # the residual lhs - rhs is formed in bulk once all equations are in
+        flat.equations.append(FlatEquation(None, _Origin(where, lhs, rhs), el.path))
 
 
 def _short(expr, limit: int = 80) -> str:

@@ -103,7 +103,7 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         src = ir.eq_to_diff.index(e)
         res.append(_time_derivative(res[src], var_syms, sym_index, ir.var_to_diff, time))
         orig.append(f"d/dt[{orig[src]}]")
-        differentiated.append(orig[src])
+        differentiated.append(str(orig[src]))
     adj = ir.adj
     var_to_diff = ir.var_to_diff
 
@@ -135,49 +135,52 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
                   alg=[], alg_syms=[], ode=[], residuals=[], assigned=[], assigned_expr=[],
                   differentiated=differentiated, n_blocks=len(blocks),
                   n_equations=len(res), n_unknowns=sum(allowed))
-    lin_cache: dict[tuple[int, int], bool] = {}
+    coef_cache: dict[tuple[int, int], ca.SX | None] = {}
+
+    def coefficient(e: int, v: int):
+        """d res[e] / d v when res[e] is linear in v with a nonzero coefficient, else None."""
+        key = (e, v)
+        if key not in coef_cache:
+            r, x = res[e], var_syms[v]
+            coef = ca.jacobian(r, x)
+            ok = not coef.is_zero() and not ca.depends_on(coef, x)
+            coef_cache[key] = coef if ok else None
+        return coef_cache[key]
 
     def solvable(e: int, v: int) -> bool:
-        key = (e, v)
-        if key not in lin_cache:
-            r, x = res[e], var_syms[v]
-            ok = ca.depends_on(r, x) and ca.is_linear(r, x)
-            if ok:
-                coef = ca.jacobian(r, x)
-                ok = not coef.is_zero()
-            lin_cache[key] = bool(ok)
-        return lin_cache[key]
+        return coefficient(e, v) is not None
 
     for block in blocks:
         eqs, vs = block.equations, block.variables
         out.largest_block = max(out.largest_block, len(eqs))
         if len(eqs) == 1:
             e, v = eqs[0], vs[0]
-            if solvable(e, v):
+            coef = coefficient(e, v)
+            if coef is not None:
                 out.assigned.append(var_syms[v])
-                out.assigned_expr.append(_solve_linear(res[e], var_syms[v]))
+                out.assigned_expr.append(_solve_linear(res[e], var_syms[v], coef))
             else:
                 out.alg.append(var_names[v])
                 out.alg_syms.append(var_syms[v])
                 out.residuals.append(res[e])
             continue
-        _solve_block(out, eqs, vs, adj, res, var_syms, var_names, solvable)
+        _solve_block(out, eqs, vs, adj, res, var_syms, var_names, coefficient)
     for v in states:
         out.ode.append(var_syms[var_to_diff[v]])
     return out
 
 
-def _solve_linear(r: ca.SX, x: ca.SX) -> ca.SX:
-    coef = ca.jacobian(r, x)
+def _solve_linear(r: ca.SX, x: ca.SX, coef: ca.SX) -> ca.SX:
+    """x from r(x) = coef*x + rest = 0."""
     rest = ca.substitute(r, x, ca.SX(0))
     return -rest / coef
 
 
-def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, solvable) -> None:
-    t = tear(eqs, vs, adj, solvable)
+def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, coefficient) -> None:
+    t = tear(eqs, vs, adj, lambda e, v: coefficient(e, v) is not None)
     out.n_torn += len(t.tearing_vars)
     seq_syms = [var_syms[v] for _, v in t.sequence]
-    seq_expr = [_solve_linear(res[e], var_syms[v]) for e, v in t.sequence]
+    seq_expr = [_solve_linear(res[e], var_syms[v], coefficient(e, v)) for e, v in t.sequence]
     resid = [res[e] for e in t.residuals]
     tv = [var_syms[v] for v in t.tearing_vars]
     if seq_syms:
@@ -223,7 +226,7 @@ def _check_counts(name, res, orig, var_names, var_to_diff, adj, hints) -> None:
 
 
 def _raise_singular(name, orig, var_names, exc, hints) -> None:
-    eqs = [orig[e] for e in exc.equations if isinstance(e, int) and e < len(orig)]
+    eqs = [str(orig[e]) for e in exc.equations if isinstance(e, int) and e < len(orig)]
     vs = [var_names[v] for v in exc.variables if isinstance(v, int) and v < len(var_names)]
     raise StructuralError(
         f"model '{name}': {len(eqs)} equations for {len(vs)} unknowns in a subsystem "
@@ -235,7 +238,7 @@ def _raise_singular(name, orig, var_names, exc, hints) -> None:
 
 def _raise_structural(name, res, orig, var_names, m, allowed, hints) -> None:
     n_unknown = sum(allowed)
-    extra_eq = [orig[e] for e in m.unmatched_equations]
+    extra_eq = [str(orig[e]) for e in m.unmatched_equations]
     free_var = [var_names[v] for v in range(len(var_names))
                 if allowed[v] and m.var_to_eq[v] == -1]
     parts = [f"model '{name}': {len(res)} equations for {n_unknown} unknowns."]

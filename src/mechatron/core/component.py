@@ -149,6 +149,9 @@ class Element:
     @property
     def path(self) -> str:
         """Full instance path from the model root, e.g. ``"motor.emf.A"``."""
+        cached = self.__dict__.get("_path_cache")
+        if cached is not None:
+            return cached
         if self._parent is None:
             return ""
         return _join(self._parent.path, self._name)

@@ -13,6 +13,7 @@ from mechatron.errors import SimulationError
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.fixed import METHODS, integrate_fixed
 from mechatron.solvers.initial import initialize
+from mechatron.solvers.logging import evaluate_outputs
 from mechatron.solvers.variable import PLUGINS, integrate_variable
 
 __all__ = ["simulate", "SOLVERS"]
@@ -97,9 +98,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                 max_step = 0.5 * float(scales.min())
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
                                             atol=atol, max_step=max_step)
-        Y = np.array(cm.f_out.map(grid.size)(grid.reshape(1, -1), X, Z,
-                                             np.repeat(p.reshape(-1, 1), grid.size, 1)),
-                     dtype=float).reshape(len(cm.names), grid.size)
+        Y = evaluate_outputs(cm, grid, X, Z, p)
         t, Xf = grid, X[:, -1]
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
             t, Y = t[1:], Y[:, 1:]

@@ -104,6 +104,13 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
                        max_step: float | None = None):
     """Integrate on ``grid``; return ``(X, Z, stats)`` with one column per grid point."""
     plugin = choose_plugin(cm, solver)
+    if cm.nr and plugin in ("cvodes", "idas"):
+        owners = sorted({owner for owner, _ in cm.relations})
+        raise SimulationError(
+            f"model '{cm.name}': solver '{solver}' cannot locate the events of "
+            f"{', '.join(owners[:6])}{' ...' if len(owners) > 6 else ''}: CasADi's SUNDIALS "
+            "interface checks zero crossings only at output times. Use solver='auto' or "
+            "'rosenbrock' (stiff) or 'rk45'.", path=cm.name)
     if cm.nX == 0 and cm.nz == 0:   # outputs are functions of time alone
         return np.zeros((0, grid.size)), np.zeros((0, grid.size)), {}, "none"
     integ = _integrator(cm, plugin, grid, rtol, atol, max_step)

@@ -1,0 +1,105 @@
+"""Run every Mechatron benchmark and print one JSON document.
+
+    python bench/run_all.py            # full run (N up to 10000; a few minutes)
+    python bench/run_all.py --quick    # N up to 1000, fewer repeats (under a minute)
+    python bench/run_all.py --only dc_motor --out bench/out/latest.json
+
+Timings are printed, never asserted. Progress goes to stderr; stdout is the JSON document:
+``environment`` (versions, machine, load), ``summary`` (the headline figures) and
+``benchmarks`` (each benchmark's full output). See bench/README.md for how to read it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import sys
+import time
+from pathlib import Path
+
+import _common  # noqa: F401  (import path)
+from _common import dumps, environment, log
+
+import bench_dc_motor
+import bench_scaling
+
+BENCHMARKS = {"dc_motor": bench_dc_motor.run, "scaling": bench_scaling.run}
+
+
+def _summary(results: dict) -> dict:
+    """The headline figures of each benchmark, for a quick look."""
+    out = {}
+    dc = results.get("dc_motor")
+    if dc and "error" not in dc:
+        mech = dc["mechatron"]
+        out["dc_motor"] = {
+            "compile_acausal_s": dc["compile_acausal"]["time"]["median_s"],
+            "mechatron_simulate_first_s": mech["first_call_s"],
+            "mechatron_simulate_median_s": mech["simulate"]["median_s"],
+            "mechatron_rel_err_w": mech["rel_err_w"],
+            **{name: {"median_s": b["time"]["median_s"],
+                      "ratio_scipy_over_mechatron": b["ratio_scipy_over_mechatron"],
+                      "rel_err_w": b["rel_err_w"]}
+               for name, b in dc["scipy"].items() if "time" in b},
+        }
+    sc = results.get("scaling")
+    if sc and "error" not in sc:
+        for kind, data in sc["models"].items():
+            rows = []
+            for r in data["rows"]:
+                row = {"N": r["N"], "compile_s": r["compile_s"],
+                       "equations_flat": (r["equations"] or {}).get("flat"),
+                       "equations_after_alias": (r["equations"] or {}).get("after_alias"),
+                       "states": r["n_states"],
+                       "simulate_s": r.get("simulate_second_s", r["simulate_first_s"]),
+                       "integrate_variable_s":
+                           r["simulate_profile_s"]["integrate_variable_s"],
+                       "solver_call_s": r["simulate_profile_s"]["solver_call_s"],
+                       "logging_by_buffer_s": (r["logging_by_buffer"] or {}).get("seconds"),
+                       "output_points": r["output_points"]}
+                if "scipy_bdf_sparse" in r:
+                    row["scipy_bdf_s"] = r["scipy_bdf_sparse"]["time"]["median_s"]
+                    row["ratio_scipy_over_mechatron_simulate"] = (
+                        r["scipy_bdf_sparse"]["ratio_scipy_over_mechatron_simulate"])
+                rows.append(row)
+            out[kind] = {"rows": rows,
+                         "compile_growth_exponents": [e["exponent"] for e in
+                                                      data["growth_exponents"]["compile"]],
+                         "compile_goals": data["compile_goals"]}
+    return out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="skip N = 10000 and use fewer repeats (under a minute)")
+    parser.add_argument("--only", choices=sorted(BENCHMARKS), action="append",
+                        help="run only this benchmark (repeatable)")
+    parser.add_argument("--out", help="also write the JSON document to this file")
+    args = parser.parse_args(argv)
+
+    start = time.perf_counter()
+    results = {}
+    for name, run in BENCHMARKS.items():
+        if args.only and name not in args.only:
+            continue
+        log(f"--- {name} ---")
+        gc.collect()
+        try:
+            results[name] = run(quick=args.quick)
+        except Exception as exc:   # one broken benchmark must not hide the others
+            log(f"{name} failed: {type(exc).__name__}: {exc}")
+            results[name] = {"error": f"{type(exc).__name__}: {exc}"}
+    doc = {"environment": environment(), "quick": args.quick,
+           "total_wall_s": time.perf_counter() - start,
+           "summary": _summary(results), "benchmarks": results}
+    text = dumps(doc)
+    print(text)
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(text + "\n")
+    return 1 if any("error" in r for r in results.values()) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
