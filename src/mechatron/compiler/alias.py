@@ -119,17 +119,20 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     derivative = flat.context.derivative
     result = AliasResult(remaining, [], n_before=n_before)
     old: list[ca.SX] = []
-    new: list[ca.SX] = []
+    new: list[ca.SX] = []        # replacement = factor * new (one product in bulk)
+    factors: list[float] = []
     for root, members in classes.items():
         if root in const:
             value_root = const[root]
             for name, f in members:
                 result.eliminated[name] = (None, f * value_root)
                 old.append(unknowns[name].sym)
-                new.append(ca.SX(f * value_root))
+                new.append(ca.SX(1.0))
+                factors.append(f * value_root)
                 if name in derivative:
                     old.append(derivative[name])
-                    new.append(ca.SX(0))
+                    new.append(ca.SX(1.0))
+                    factors.append(0.0)
             continue
         best_name, best_f = max(members, key=lambda m: _rank(unknowns[m[0]], m[0] in
                                                              derivative))
@@ -141,13 +144,17 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             k = f / best_f  # name = k * best
             result.eliminated[name] = (best_name, k)
             old.append(unknowns[name].sym)
-            new.append(k * rep)
+            new.append(rep)
+            factors.append(k)
             if name in derivative:
                 old.append(derivative[name])
-                new.append(k * flat.context.der_symbol(best_name))
+                new.append(flat.context.der_symbol(best_name))
+                factors.append(k)
         _merge_starts(result, flat, best_name, [(n, f / best_f) for n, f in members])
     if old:
-        res = ca.substitute([eq.residual for eq in remaining], old, new)
+        replacement = ca.vertcat(*new) * ca.DM(factors)
+        res = ca.substitute([eq.residual for eq in remaining], [ca.vertcat(*old)],
+                            [replacement])
         result.equations = [FlatEquation(r, eq.origin, eq.owner)
                             for r, eq in zip(res, remaining)]
     return result
