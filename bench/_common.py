@@ -128,38 +128,17 @@ CHUNK = 64   # output points per mapped evaluation in logging_by_buffer
 
 
 def logging_by_buffer(cm, grid, X, Z, p, chunk: int = CHUNK):
-    """Seconds to evaluate every logged variable at every output point into NumPy with
-    CasADi's buffer interface: ``cm.f_out.map(chunk, "serial")`` evaluated on views of
-    column-major NumPy arrays, chunk after chunk. No ``casadi.DM`` round trip, and the
-    mapped function has ``chunk`` columns, not one per output point (building a ``Map``
-    costs time proportional to its output size). This is the alternative measured against
-    what ``mt.simulate`` does. Returns ``(Y, seconds)``, ``Y`` of shape (number of logged
-    variables, number of points)."""
+    """Seconds to evaluate every logged variable at every output point with the core's
+    chunked buffer evaluation (``mechatron.solvers.logging``, what ``mt.simulate`` uses).
+    Returns ``(Y, seconds)``, ``Y`` of shape (number of logged variables, points)."""
     import numpy as np
 
+    from mechatron.solvers.logging import evaluate_outputs
+
     start = time.perf_counter()
-    n, n_y = grid.size, cm.f_out.nnz_out(0)
-    nx, nz = X.shape[0], Z.shape[0]
-    t = np.ascontiguousarray(grid, dtype=float)
-    Xf = np.asarray(X, dtype=float).ravel(order="F")     # point k: Xf[k*nx:(k+1)*nx]
-    Zf = np.asarray(Z, dtype=float).ravel(order="F")
-    pv = np.asarray(p, dtype=float)
-    out = np.empty(n_y * n)
-    mapped = {}
-    for k in range(0, n, chunk):
-        m = min(chunk, n - k)
-        if m not in mapped:
-            f = cm.f_out.map(m, "serial")
-            buf, evaluate = f.buffer()
-            mapped[m] = (f, buf, evaluate, np.tile(pv, m))
-        _, buf, evaluate, pm = mapped[m]
-        buf.set_arg(0, memoryview(t[k:k + m]))
-        buf.set_arg(1, memoryview(Xf[k * nx:(k + m) * nx]))
-        buf.set_arg(2, memoryview(Zf[k * nz:(k + m) * nz]))
-        buf.set_arg(3, memoryview(pm))
-        buf.set_res(0, memoryview(out[k * n_y:(k + m) * n_y]))
-        evaluate()
-    return out.reshape(n, n_y).T, time.perf_counter() - start
+    Y = evaluate_outputs(cm, np.asarray(grid, dtype=float), np.asarray(X, dtype=float),
+                         np.asarray(Z, dtype=float), np.asarray(p, dtype=float))
+    return Y, time.perf_counter() - start
 
 
 def logging_alternative(cm, res, grid) -> dict | None:
