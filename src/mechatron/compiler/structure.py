@@ -155,6 +155,11 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         out.largest_block = max(out.largest_block, len(eqs))
         if len(eqs) == 1:
             e, v = eqs[0], vs[0]
+            quick = _explicit(res[e], var_syms[v])
+            if quick is not None:
+                out.assigned.append(var_syms[v])
+                out.assigned_expr.append(quick)
+                continue
             coef = coefficient(e, v)
             if coef is not None:
                 out.assigned.append(var_syms[v])
@@ -168,6 +173,30 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     for v in states:
         out.ode.append(var_syms[var_to_diff[v]])
     return out
+
+
+def _is_symbol(expr: ca.SX, name: str) -> bool:
+    return expr.is_symbolic() and expr.name() == name
+
+
+def _explicit(r: ca.SX, x: ca.SX):
+    """x from the common forms ``x - b``, ``b - x``, ``c*x - b`` with b, c free of x, read
+    off the expression tree (cheaper than a Jacobian and a substitution); else None."""
+    if not r.is_op(ca.OP_SUB):
+        return None
+    name = x.name()
+    a, b = r.dep(0), r.dep(1)
+    if _is_symbol(a, name):
+        return None if ca.depends_on(b, x) else b
+    if _is_symbol(b, name):
+        return None if ca.depends_on(a, x) else a
+    if a.is_op(ca.OP_MUL):
+        c0, c1 = a.dep(0), a.dep(1)
+        for factor, other in ((c1, c0), (c0, c1)):
+            if _is_symbol(factor, name) and not ca.depends_on(other, x) \
+                    and not ca.depends_on(b, x):
+                return b / other
+    return None
 
 
 def _solve_linear(r: ca.SX, x: ca.SX, coef: ca.SX) -> ca.SX:
