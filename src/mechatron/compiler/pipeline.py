@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import time as _time
 
 import casadi as ca
@@ -18,6 +19,22 @@ __all__ = ["compile_model"]
 
 
 def compile_model(model: Component, *, name: str | None = None) -> CompiledModel:
+    """Compile a model into a :class:`CompiledModel` (see :func:`_compile`).
+
+    The cyclic garbage collector is paused while compiling: the passes allocate hundreds of
+    thousands of short-lived wrappers and no cycles, and full collections over a growing
+    heap would make compile time grow faster than the model.
+    """
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return _compile(model, name)
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _compile(model: Component, name: str | None) -> CompiledModel:
     """Compile a model into a :class:`CompiledModel`.
 
     Passes: flatten and connect; alias elimination; structural analysis with index
