@@ -88,9 +88,9 @@ def test_sundials_solvers_refuse_models_with_events_instead_of_missing_them():
 
 
 def test_logged_values_equal_a_direct_evaluation_across_chunks():
-    from mechatron.solvers.logging import CHUNK
+    from mechatron.solvers.logging import chunk_size
     cm = mt.compile_model(rectifier())
-    t = np.linspace(0, 1 / F, 3 * CHUNK + 5)
+    t = np.linspace(0, 1 / F, 3 * chunk_size(len(cm.names)) + 5)
     res = mt.simulate(cm, 1 / F, rtol=1e-10, atol=1e-12, t_out=t)
     vs = A * np.sin(2 * np.pi * F * res.t)
     np.testing.assert_allclose(res["sine.y"], vs, atol=1e-12)

@@ -13,7 +13,14 @@ from mechatron.compiler.compiled import CompiledModel
 
 __all__ = ["evaluate_outputs"]
 
-CHUNK = 64
+CHUNK = 64            # output points per mapped evaluation, for large models
+CHUNK_VALUES = 16384  # small models map more points at once: about this many values
+
+
+def chunk_size(n_logged: int) -> int:
+    """Points per mapped evaluation: CHUNK for large models, more for small ones (fewer
+    calls), bounded so that building the map stays cheap."""
+    return int(min(1024, max(CHUNK, CHUNK_VALUES // max(1, n_logged))))
 
 
 def _mapped(cm: CompiledModel, m: int):
@@ -40,8 +47,9 @@ def evaluate_outputs(cm: CompiledModel, t: np.ndarray, X: np.ndarray, Z: np.ndar
     Zf = np.asarray(Z, dtype=float).ravel(order="F")
     out = np.empty(n_y * n)
     tiles: dict[int, np.ndarray] = {}
-    for k in range(0, n, CHUNK):
-        m = min(CHUNK, n - k)
+    step = chunk_size(n_y)
+    for k in range(0, n, step):
+        m = min(step, n - k)
         _, buf, evaluate = _mapped(cm, m)
         pm = tiles.get(m)
         if pm is None:
