@@ -69,3 +69,23 @@ def rc() -> System:
         [1, 2],  # 1: i = C der(v)
     ]
     return System(names, adj, [2, -1, -1])
+
+
+def make_inertia_chain(n: int) -> System:
+    """``n`` inertias rigidly coupled in a row (index 2): equation k is
+    ``J der(w_k) = tau_{k-1} - tau_k``; then ``w_k = w_{k+1}`` for each coupling.
+    Variables: w (n), tau (n - 1), der(w) (n)."""
+    w, tau = list(range(n)), list(range(n, 2 * n - 1))
+    dw = list(range(2 * n - 1, 3 * n - 1))
+    adj = [[dw[k]] + ([tau[k - 1]] if k else []) + ([tau[k]] if k < n - 1 else [])
+           for k in range(n)]
+    adj += [[w[k], w[k + 1]] for k in range(n - 1)]
+    names = ([f"w{k}" for k in w] + [f"tau{k}" for k in range(n - 1)]
+             + [f"der(w{k})" for k in range(n)])
+    return System(names, adj, dw + [-1] * (2 * n - 1))
+
+
+@pytest.fixture
+def inertia_chain():
+    """Factory: ``inertia_chain(n)`` builds :func:`make_inertia_chain`."""
+    return make_inertia_chain

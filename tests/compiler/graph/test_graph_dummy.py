@@ -141,14 +141,9 @@ def test_select_returning_a_non_candidate_raises(inertias):
         dummy_derivatives(ir, select=lambda eqs, candidates, k: [2])
 
 
-def test_chain_of_rigid_inertias_keeps_one_state():
-    n = 40
-    w, tau = list(range(n)), list(range(n, 2 * n - 1))
-    dw = list(range(2 * n - 1, 3 * n - 1))
-    adj = [[dw[k]] + ([tau[k - 1]] if k else []) + ([tau[k]] if k < n - 1 else [])
-           for k in range(n)]
-    adj += [[w[k], w[k + 1]] for k in range(n - 1)]
-    ir = pantelides(3 * n - 1, adj, dw + [-1] * (2 * n - 1))
+def test_chain_of_rigid_inertias_keeps_one_state(inertia_chain):
+    chain = inertia_chain(40)
+    ir = pantelides(chain.n_var, chain.adj, chain.var_to_diff)
     dummies = dummy_derivatives(ir)
     states = state_selection(ir, dummies)
     assert_square_and_matchable(ir, dummies, states)

@@ -30,14 +30,10 @@ def test_blt_on_one_long_cycle():
     assert len(torn.tearing_vars) == 1 and len(torn.sequence) == N - 1
 
 
-def test_index_reduction_of_a_long_chain_of_rigid_inertias():
+def test_index_reduction_of_a_long_chain_of_rigid_inertias(inertia_chain):
     n = N // 5
-    w, tau = list(range(n)), list(range(n, 2 * n - 1))
-    dw = list(range(2 * n - 1, 3 * n - 1))
-    adj = [[dw[k]] + ([tau[k - 1]] if k else []) + ([tau[k]] if k < n - 1 else [])
-           for k in range(n)]
-    adj += [[w[k], w[k + 1]] for k in range(n - 1)]
-    ir = pantelides(3 * n - 1, adj, dw + [-1] * (2 * n - 1))
+    chain = inertia_chain(n)
+    ir = pantelides(chain.n_var, chain.adj, chain.var_to_diff)
     assert len(ir.differentiated) == n - 1
     states = state_selection(ir, dummy_derivatives(ir))
     assert len(states) == 1
