@@ -119,7 +119,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
         raise TypeError(f"compile_model: expected a Component instance, got {model!r}.")
     name = name or model._name or type(model).__name__
     flat = FlatModel(name=name, context=BuildContext())
-    problems: list[str] = []
+    problems = _Problems()
     elements = list(_walk(model))
     for el in elements:
         if isinstance(el, Component) and el._partial and el is not model:
@@ -137,17 +137,35 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
             el._syms = None
             el._path_cache = None
     if problems:
-        kind = UnitError if all("expected a value in" in p for p in problems) else None
-        if kind is None and any(p.startswith("cannot connect") for p in problems):
-            kind = ConnectError
-        if kind is None:
-            kind = ParameterError if all(_is_value_problem(p) for p in problems) else ModelError
-        raise kind(_summary(name, problems), problems=problems, path=name)
+        raise problems.error_class()(_summary(name, problems), problems=list(problems),
+                                     path=name)
     return flat
 
 
-def _is_value_problem(p: str) -> bool:
-    return " must be " in p or "no value" in p or "expected a" in p or "cannot read" in p
+class _Problems(list):
+    """Messages collected by the validators, each with the error class it belongs to;
+    ``append`` records a model problem, ``add`` one of a given class."""
+
+    def __init__(self):
+        super().__init__()
+        self.kinds: list[type] = []
+
+    def append(self, message: str) -> None:
+        self.add(ModelError, message)
+
+    def add(self, kind: type, message: str) -> None:
+        super().append(message)
+        self.kinds.append(kind)
+
+    def error_class(self) -> type:
+        """UnitError if every problem is a unit problem, ParameterError if every one is
+        about values, ConnectError if any connection failed, else ModelError."""
+        kinds = set(self.kinds)
+        if kinds == {UnitError}:
+            return UnitError
+        if kinds <= {UnitError, ParameterError}:
+            return ParameterError
+        return ConnectError if ConnectError in kinds else ModelError
 
 
 def _summary(name: str, problems: list[str]) -> str:
@@ -170,14 +188,14 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
                 raw = el._values.get(key, decl.default)
                 value = float("nan")
                 if raw is None:
-                    problems.append(f"{el.describe()}: parameter {key} has no value and no "
-                                    f"default. Give one, e.g. {type(el).__name__}"
-                                    f"({key}=...).")
+                    problems.add(ParameterError,
+                                 f"{el.describe()}: parameter {key} has no value and no "
+                                 f"default. Give one, e.g. {type(el).__name__}({key}=...).")
                 else:
                     try:
                         value = to_si(raw, decl.unit, path)
                     except UnitError as exc:
-                        problems.append(str(exc))
+                        problems.add(UnitError, str(exc))
                     else:
                         _check_range(el, key, decl, value, problems)
                 flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
@@ -193,7 +211,7 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
                     try:
                         start = to_si(given.value, decl.unit, path)
                     except UnitError as exc:
-                        problems.append(str(exc))
+                        problems.add(UnitError, str(exc))
                     priority = given.priority
                 flat.variables[path] = FlatVariable(path, sym, decl.unit, decl.doc, kind,
                                                     owner_path, start, priority,
@@ -210,11 +228,13 @@ def _domain_hint(el, decl) -> str:
 
 def _check_range(el, key, decl, value, problems) -> None:
     if value != value:
-        problems.append(f"{el.describe()}: {key} is NaN.")
+        problems.add(ParameterError, f"{el.describe()}: {key} is NaN.")
     if decl.min is not None and value < decl.min:
-        problems.append(f"{el.describe()}: {key} must be >= {decl.min:g}, got {value:g}.")
+        problems.add(ParameterError,
+                     f"{el.describe()}: {key} must be >= {decl.min:g}, got {value:g}.")
     if decl.max is not None and value > decl.max:
-        problems.append(f"{el.describe()}: {key} must be <= {decl.max:g}, got {value:g}.")
+        problems.add(ParameterError,
+                     f"{el.describe()}: {key} must be <= {decl.max:g}, got {value:g}.")
 
 
 def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connect, str]]:
@@ -333,7 +353,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
         for a, b in zip(resolved, resolved[1:]):
             msg = _compatible(a, b)
             if msg:
-                problems.append(msg)
+                problems.add(ConnectError, msg)
                 tried.update((_key(a), _key(b)))
                 continue
             ka = _key(a)
