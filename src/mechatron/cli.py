@@ -26,7 +26,11 @@ missing file or directory), reported as one line ``error: <message>`` on stderr;
 unexpected error (a bug), also one line, or for a demo whose checks failed. Set
 ``MECHATRON_DEBUG=1`` to get the traceback as well.
 
-This module is the only one of Mechatron that prints.
+Later subcommands (``library``, ``codegen``, ``estimate``...) live beside the code they
+drive, in a module named in :data:`EXTENSIONS` that defines ``add_commands(sub)``; it
+adds its parsers to ``sub`` and uses the helpers of this module (:func:`emit`,
+:func:`emit_json`, :func:`table`, :func:`add_json`). The command-line modules are the
+only ones of Mechatron that print.
 """
 
 from __future__ import annotations
@@ -53,7 +57,7 @@ from mechatron.results import SimResult
 from mechatron.solvers import METHODS as FIXED_STEP_METHODS
 from mechatron.solvers import SOLVERS
 
-__all__ = ["main", "build_parser", "DEMO_STEPS", "DemoStep", "DemoRun", "CommandError",
+__all__ = ["main", "build_parser", "EXTENSIONS", "DEMO_STEPS", "DemoStep", "DemoRun", "CommandError",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE"]
 
 EXIT_OK = 0
@@ -73,6 +77,8 @@ class CommandError(MechatronError, ValueError):
 
 
 # ---------------------------------------------------------------------------- formatting
+# The public names (emit, emit_json, table, add_json, ...) are defined after the parser
+# helpers below; extension modules import them from here.
 def _emit(text: str = "") -> None:
     print(text)
 
@@ -780,6 +786,29 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------------------ parser
+#: Modules that add subcommands: each defines ``add_commands(sub)`` (``sub`` is the
+#: ``argparse`` sub-parsers object); a module that does not exist yet is skipped.
+EXTENSIONS = (
+    "mechatron.library.cli",
+    "mechatron.viz.cli",
+    "mechatron.estimation.cli",
+    "mechatron.codegen.cli",
+    "mechatron.realtime.cli",
+)
+
+
+def _add_extensions(sub) -> None:
+    import importlib
+    for name in EXTENSIONS:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name is not None and name.startswith(exc.name):
+                continue          # that extension is not part of this installation
+            raise
+        module.add_commands(sub)
+
+
 def _add_json(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true",
                    help="print one JSON object on stdout instead of the summary")
@@ -859,7 +888,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="DIR", default="demo_output",
                    help="directory for plots and logs (default: %(default)s)")
     p.set_defaults(func=cmd_demo)
+    _add_extensions(sub)
     return parser
+
+
+#: Helpers for the extension modules of :data:`EXTENSIONS`.
+emit = _emit
+emit_json = _emit_json
+table = _table
+add_json = _add_json
+add_set = _add_set
+duration = _duration
+num = _num
+output_path = _output_path
+new_figure = _new_figure
 
 
 # -------------------------------------------------------------------------------- main

@@ -1,0 +1,3 @@
+"""Magnetic domain: across = magnetomotive force (A), through = magnetic flux (Wb)."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""Thermal domain: across = temperature T (K), through = heat flow Q (W)."""
+
+__all__: list[str] = []
