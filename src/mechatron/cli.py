@@ -790,7 +790,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 #: ``argparse`` sub-parsers object); a module that does not exist yet is skipped.
 EXTENSIONS = (
     "mechatron.library.cli",
-    "mechatron.viz.cli",
+    "mechatron.report.cli",
     "mechatron.estimation.cli",
     "mechatron.codegen.cli",
     "mechatron.realtime.cli",

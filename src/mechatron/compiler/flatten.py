@@ -16,6 +16,7 @@ from mechatron.core.component import Component, Connect, Connector, Element, Sig
 from mechatron.core.context import BuildContext
 from mechatron.core.declarations import (Across, Input, Output, Parameter, Start, Through,
                                          Variable)
+from mechatron.core.domains import SIGNAL
 from mechatron.errors import ConnectError, ModelError, ParameterError, UnitError
 from mechatron.units import to_si
 
@@ -63,6 +64,9 @@ class FlatModel:
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
     components: dict[str, str] = field(default_factory=dict)  # path -> class name
     time_scales: list = field(default_factory=list)           # SX of parameters
+    #: Each connection set as a list of (port path, Domain, is_output); ``is_output`` is
+    #: True for a signal output driving the set. For diagrams and reports.
+    connection_sets: list = field(default_factory=list)
 
     @property
     def time(self) -> ca.SX:
@@ -366,6 +370,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
     connected: set[int] = set(ports) | tried
     for group in groups.values():
         group.sort(key=_port_path)
+        flat.connection_sets.append([_set_member(p) for p in group])
         if isinstance(group[0], SignalRef):
             _signal_set(flat, group, problems)
         else:
@@ -381,6 +386,12 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
                     problems.append(f"signal input '{_join(el.path, key)}' is not connected. "
                                     "Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, uf, ports, problems)
+
+
+def _set_member(p) -> tuple:
+    if isinstance(p, SignalRef):
+        return (_port_path(p), SIGNAL, isinstance(p.declaration, Output))
+    return (_port_path(p), type(p).domain, False)
 
 
 def _join(a, b):
