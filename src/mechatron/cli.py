@@ -52,6 +52,9 @@ import numpy as np
 
 import mechatron as mt
 from mechatron.errors import MechatronError
+from mechatron.models.compare import COMPARE_POINTS, compare_variants
+from mechatron.models.compare import relative as _relative
+from mechatron.models.compare import max_deviation as _max_deviation
 from mechatron.results import SUFFIXES as LOG_SUFFIXES
 from mechatron.results import SimResult
 from mechatron.solvers import METHODS as FIXED_STEP_METHODS
@@ -64,8 +67,6 @@ EXIT_OK = 0
 EXIT_FAILURE = 1     # an unexpected error, or a demo check that failed
 EXIT_USAGE = 2       # bad arguments or bad input (argparse's own code for usage errors)
 
-#: Points of the common output grid of ``compare``.
-COMPARE_POINTS = 1001
 
 #: Exceptions that mean "the input is wrong", not "Mechatron is wrong".
 USER_ERRORS = (MechatronError, ValueError, TypeError, FileNotFoundError, FileExistsError,
@@ -215,19 +216,6 @@ def _new_figure(rows: int, *, width: float = 8.0, height: float = 2.4, sharex: b
 
 def _unit_label(unit: str) -> str:
     return f"[{unit}]" if unit else "[1]"
-
-
-def _relative(deviation: float, scale: float) -> float:
-    """``deviation`` relative to ``scale`` (0 when both vanish, inf when only scale does)."""
-    if scale > 0:
-        return deviation / scale
-    return 0.0 if deviation == 0 else math.inf
-
-
-def _max_deviation(y: np.ndarray, y_ref: np.ndarray) -> tuple[float, float]:
-    """Largest absolute deviation, and the same relative to the largest ``|y_ref|``."""
-    dev = float(np.max(np.abs(y - y_ref))) if y.size else 0.0
-    return dev, _relative(dev, float(np.max(np.abs(y_ref))) if y_ref.size else 0.0)
 
 
 @dataclass(frozen=True)
@@ -442,42 +430,23 @@ def cmd_compare(args: argparse.Namespace) -> int:
     params = _parse_sets(args.set, entry)
     settings = _Settings.resolve(args, entry)
     out = _output_path(args.out, "--out", _figure_suffixes()) if args.out else None
-    grid = np.linspace(0.0, settings.t_stop, COMPARE_POINTS)
-
-    variants = list(entry.variants)
-    results: dict[str, SimResult] = {}
-    for v in variants:
-        results[v] = mt.simulate(entry.build(v, **params), settings.t_stop,
-                                 solver=settings.solver, dt=settings.dt,
-                                 rtol=settings.rtol, atol=settings.atol, t_out=grid)
-    ref = variants[0]
-    labels = list(entry.output_paths(ref))
-    deviations: dict[str, dict[str, dict[str, float]]] = {}
-    missing: dict[str, list[str]] = {}
-    for v in variants[1:]:
-        paths = entry.output_paths(v)
-        missing[v] = [label for label in labels if label not in paths]
-        deviations[v] = {}
-        for label in labels:
-            if label in paths:
-                y_ref = results[ref][entry.output_paths(ref)[label]]
-                dev, rel = _max_deviation(results[v][paths[label]], y_ref)
-                deviations[v][label] = {"max_abs": dev, "max_rel": rel}
-    final = {v: {label: results[v].final(path) for label, path in
-                 entry.output_paths(v).items()} for v in variants}
+    cmp = compare_variants(entry, params=params, t_stop=settings.t_stop,
+                           solver=settings.solver, dt=settings.dt, rtol=settings.rtol,
+                           atol=settings.atol, points=COMPARE_POINTS)
+    variants, ref, labels = list(cmp.results), cmp.reference, cmp.labels
 
     files: dict[str, str] = {}
     if out is not None:
-        _compare_plot(entry, results, labels, out)
+        cmp.figure().savefig(out, dpi=100)
         files["out"] = str(out)
 
     if args.json:
         _emit_json({"model": entry.name, "reference": ref, "variants": variants,
                     **settings.as_dict(), "points": COMPARE_POINTS, "set": params,
-                    "deviations": deviations, "missing": {k: v for k, v in missing.items()
-                                                          if v},
-                    "final": final,
-                    "stats": {v: r.stats.as_dict() for v, r in results.items()},
+                    "deviations": cmp.deviations,
+                    "missing": {k: v for k, v in cmp.missing.items() if v},
+                    "final": cmp.final(),
+                    "stats": {v: r.stats.as_dict() for v, r in cmp.results.items()},
                     "files": files})
         return EXIT_OK
 
@@ -491,37 +460,22 @@ def cmd_compare(args: argparse.Namespace) -> int:
         rows = []
         for v in variants[1:]:
             for label in labels:
-                d = deviations[v].get(label)
+                d = cmp.deviations[v].get(label)
                 unit = entry.output_units.get(label, "")
                 rows.append([v, label, unit] + (["-", "-"] if d is None else
                             [f"{d['max_abs']:.3e}", f"{d['max_rel']:.3e}"]))
         _emit(_table(["variant", "label", "unit", "max abs dev", "max rel dev"], rows,
                      right="34"))
-        for v, labels_missing in missing.items():
+        for v, labels_missing in cmp.missing.items():
             if labels_missing:
                 _emit(f"note: variant '{v}' has no output {', '.join(labels_missing)}.")
     _emit("\nsolver profile:")
-    _emit(_table(_PROFILE_HEADERS, _profile_rows({v: r.stats for v, r in results.items()}),
+    _emit(_table(_PROFILE_HEADERS,
+                 _profile_rows({v: r.stats for v, r in cmp.results.items()}),
                  right="2345678"))
     for path in files.values():
         _emit(f"\nwrote {path} (overlay plot)")
     return EXIT_OK
-
-
-def _compare_plot(entry, results: dict[str, SimResult], labels: list[str], path: Path):
-    fig, axes = _new_figure(len(labels))
-    styles = ["-", "--", ":", "-."]
-    for axis, label in zip(axes, labels):
-        for k, (v, res) in enumerate(results.items()):
-            p = entry.output_paths(v).get(label)
-            if p is not None:
-                axis.plot(res.t, res[p], styles[k % len(styles)], label=f"{v} ({p})")
-        axis.set_ylabel(f"{label} {_unit_label(entry.output_units.get(label, ''))}")
-        axis.grid(True, alpha=0.3)
-        axis.legend(loc="best", fontsize="small")
-    axes[-1].set_xlabel("t [s]")
-    fig.suptitle(f"{entry.name}: variants compared")
-    fig.savefig(path, dpi=100)
 
 
 # -------------------------------------------------------------------------------- demo

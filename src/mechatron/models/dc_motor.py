@@ -93,5 +93,6 @@ ENTRY = register(ModelEntry(
     expected={"w": 0.151 * 19.2 / (7.1 * 1.236e-4 + 0.151 ** 2),
               "i": 1.236e-4 * 19.2 / (7.1 * 1.236e-4 + 0.151 ** 2)},
     expected_tolerance=1e-5,
+    variant_tolerance=1e-8,
     tags=("seed", "electromechanical", "motor"),
 ))

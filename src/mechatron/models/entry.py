@@ -50,6 +50,9 @@ class ModelEntry:
     experiment: Experiment
     expected: dict[str, float] = field(default_factory=dict)
     expected_tolerance: float = 1e-6
+    #: Largest deviation allowed between variants, relative to the largest |value| of the
+    #: output in the reference (first) variant, on the default experiment.
+    variant_tolerance: float = 1e-6
     tags: tuple[str, ...] = ()
     default_variant: str = ""
 

@@ -12,6 +12,9 @@ from mechatron.models.entry import ModelEntry
 
 __all__ = ["register", "get", "list"]
 
+#: Modules of the package that register entries when imported.
+BUILTIN_MODULES = ("dc_motor",)
+
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
 
@@ -29,8 +32,10 @@ def _load() -> None:
     if _loaded:
         return
     _loaded = True
-    from mechatron.models import dc_motor  # noqa: F401  (registers itself)
+    from importlib import import_module
     from importlib.metadata import entry_points
+    for module in BUILTIN_MODULES:
+        import_module(f"mechatron.models.{module}")      # each registers its entries
     for ep in entry_points(group="mechatron.models"):
         obj = ep.load()
         obj = obj() if callable(obj) and not isinstance(obj, ModelEntry) else obj
