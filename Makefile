@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench clean sysdeps
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -12,10 +12,15 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[dev]"
 	@touch $(STAMP)
 
-demo: $(STAMP)
+# Debian packages some features need (Graphviz, Chromium, ARM compiler, QEMU): installed
+# when root, otherwise a note; see tools/sysdeps.sh.
+sysdeps:
+	@tools/sysdeps.sh
+
+demo: $(STAMP) sysdeps
 	$(BIN)/mechatron demo --out demo_output
 
-test: $(STAMP)
+test: $(STAMP) sysdeps
 	$(BIN)/python -m pytest -q
 
 bench: $(STAMP)
