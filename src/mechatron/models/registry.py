@@ -13,7 +13,7 @@ from mechatron.models.entry import ModelEntry
 __all__ = ["register", "get", "list"]
 
 #: Modules of the package that register entries when imported.
-BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm")
+BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum")
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
