@@ -13,7 +13,8 @@ from mechatron.models.entry import ModelEntry
 __all__ = ["register", "get", "list"]
 
 #: Modules of the package that register entries when imported.
-BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum")
+BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum",
+                   "motor_heating")
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
