@@ -14,7 +14,7 @@ __all__ = ["register", "get", "list"]
 
 #: Modules of the package that register entries when imported.
 BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum",
-                   "motor_heating", "quarter_car")
+                   "motor_heating", "quarter_car", "ball_screw")
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
