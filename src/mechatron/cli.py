@@ -141,7 +141,7 @@ def _table(headers: Sequence[str], rows: Iterable[Sequence[Any]], *, right: str 
 
 def _first_sentence(text: str, width: int = 78) -> str:
     text = " ".join(text.split())
-    head = text.split(": ")[0].split(". ")[0].rstrip(".")
+    head = text.split(". ")[0].rstrip(".")
     return head if len(head) <= width else head[: width - 3].rstrip() + "..."
 
 
