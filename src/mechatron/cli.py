@@ -700,6 +700,44 @@ def _demo_startup_plot(d: DemoRun) -> Path:
     return path
 
 
+def _demo_database(d: DemoRun) -> None:
+    """Every database model: its default experiment against its expected values, and its
+    variants against each other."""
+    rows = []
+    for entry in mt.models.list():
+        cmp = compare_variants(entry, points=201)
+        ref = cmp.results[cmp.reference]
+        worst_expected = max((_relative(abs(ref.final(entry.output_paths(cmp.reference)[k])
+                                            - v), abs(v))
+                              for k, v in entry.expected.items()), default=0.0)
+        d.check(f"{entry.name}: expected values", worst_expected, entry.expected_tolerance)
+        worst = cmp.worst()
+        if len(cmp.results) > 1:
+            d.check(f"{entry.name}: variants agree", worst, entry.variant_tolerance)
+        wall = sum(r.stats.wall_time for r in cmp.results.values())
+        rows.append([entry.name, ", ".join(cmp.results), f"{worst_expected:.1e}",
+                     f"{worst:.1e}" if len(cmp.results) > 1 else "-", _duration(wall)])
+    d.say(_table(["model", "variants", "expected: worst rel. err", "variants: worst dev",
+                  "simulated in"], rows, right="234"))
+
+
+def _demo_report(d: DemoRun) -> None:
+    from mechatron.report.diagram import write_diagram
+    from mechatron.report.html import write_report
+    import shutil
+    d.out.mkdir(parents=True, exist_ok=True)
+    if shutil.which("dot") is None:
+        d.say("  Graphviz is not installed: skipping the diagram (run `make demo` as root "
+              "to install it)")
+    else:
+        d.files.append(write_diagram(d.entry.build("acausal"), d.out / f"{d.name}.svg",
+                                     d.name))
+        d.say(f"  wrote {d.files[-1]} (the network, domain-coloured)")
+    d.files.append(write_report(d.entry, d.out / f"{d.name}_report.html"))
+    d.say(f"  wrote {d.files[-1]} (description, diagram, parameters, plots, variants, "
+          "solver profile)")
+
+
 #: The showcase, in order. Later features append or insert their own steps.
 DEMO_STEPS: list[DemoStep] = [
     DemoStep("Build the DC motor both ways: acausal network and hand-written ODEs",
@@ -713,6 +751,8 @@ DEMO_STEPS: list[DemoStep] = [
     DemoStep("Fixed-step RK4 (the step function of code generation and HIL)",
              _demo_fixed_step),
     DemoStep("Plots and simulation logs", _demo_files),
+    DemoStep("The model database: expected values and variants compared", _demo_database),
+    DemoStep("Diagram and HTML report of the DC motor", _demo_report),
 ]
 
 
