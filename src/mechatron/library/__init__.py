@@ -1,8 +1,8 @@
 """The component library, one subpackage per domain (DESIGN.md §3)."""
 
 from mechatron.library import (blocks, electrical, electromechanical, hydraulic, magnetic,
-                               multibody, physical_signals, rotational, thermal,
+                               mechanisms, multibody, physical_signals, rotational, thermal,
                                translational)
 
-__all__ = ["electrical", "rotational", "translational", "electromechanical", "thermal",
-           "magnetic", "hydraulic", "physical_signals", "blocks", "multibody"]
+__all__ = ["electrical", "rotational", "translational", "mechanisms", "electromechanical",
+           "thermal", "magnetic", "hydraulic", "physical_signals", "blocks", "multibody"]

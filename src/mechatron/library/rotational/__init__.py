@@ -3,16 +3,26 @@
 
 Two-flange components have flanges ``A`` and ``B``: ``w = A.w - B.w`` and ``tau`` is the
 torque flowing into the component at ``A`` (and out at ``B``); ``tau * w > 0`` is power
-absorbed. One-flange components (inertia, reference) have a single flange ``port``.
-Angles, where a component needs them (springs), are its own states.
+absorbed. One-flange components (inertia, reference) have a single flange ``port``; gears
+name their flanges ``A`` (input), ``B`` (output) and ``S`` (support, where it has one).
+Angles, where a component needs them (springs, stops, sensors), are its own states.
 """
 
 from mechatron.library.rotational.components import (AngularVelocitySensor, IdealGear,
                                                       IdealTorqueSource, Inertia,
                                                       RotationalDamper, RotationalFriction,
                                                       RotationalReference, RotationalSpring)
+from mechatron.library.rotational.gears import LossyGear, SimpleGear
 from mechatron.library.rotational.interfaces import Flange, TwoFlange
+from mechatron.library.rotational.nonlinear import (FanLoad, FrictionClutch,
+                                                     RotationalBacklash, RotationalHardStop)
+from mechatron.library.rotational.sensors import AngleSensor, PowerSensor, TorqueSensor
+from mechatron.library.rotational.sources import (ConstantTorque, IdealAngleSource,
+                                                   IdealAngularVelocitySource)
 
 __all__ = ["Flange", "TwoFlange", "Inertia", "RotationalSpring", "RotationalDamper",
            "RotationalFriction", "IdealGear", "RotationalReference", "IdealTorqueSource",
-           "AngularVelocitySensor"]
+           "AngularVelocitySensor",
+           "RotationalHardStop", "RotationalBacklash", "FrictionClutch", "FanLoad",
+           "LossyGear", "SimpleGear", "IdealAngularVelocitySource", "IdealAngleSource",
+           "ConstantTorque", "TorqueSensor", "AngleSensor", "PowerSensor"]

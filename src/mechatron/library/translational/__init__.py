@@ -1,8 +1,9 @@
 """Mechanical translational domain: across = velocity v (m/s), through = force f (N).
 
 Two-flange components have flanges ``A`` and ``B``: ``v = A.v - B.v``, ``f`` is the force
-flowing into the component at ``A``. One-flange components have a single ``port``.
-Positions, where a component needs them (springs, sensors), are its own states.
+flowing into the component at ``A`` (and out at ``B``); ``f * v > 0`` is power absorbed.
+One-flange components (mass, reference) have a single ``port``. Positions, where a
+component needs them (springs, stops, sensors), are its own states.
 """
 
 from mechatron.library.translational.components import (IdealForceSource, Mass, MotionSensor,
@@ -11,7 +12,17 @@ from mechatron.library.translational.components import (IdealForceSource, Mass, 
                                                          TranslationalReference,
                                                          TranslationalSpring)
 from mechatron.library.translational.interfaces import Flange, TwoFlange
+from mechatron.library.translational.nonlinear import PreloadedSpring, TranslationalHardStop
+from mechatron.library.translational.sensors import (AccelerationSensor, ForceSensor,
+                                                      PositionSensor,
+                                                      TranslationalPowerSensor,
+                                                      VelocitySensor)
+from mechatron.library.translational.sources import (ConstantForce, IdealPositionSource,
+                                                      IdealVelocitySource)
 
 __all__ = ["Flange", "TwoFlange", "Mass", "TranslationalSpring", "TranslationalDamper",
            "TranslationalFriction", "TranslationalReference", "IdealForceSource",
-           "MotionSensor"]
+           "MotionSensor",
+           "TranslationalHardStop", "PreloadedSpring", "IdealVelocitySource",
+           "IdealPositionSource", "ConstantForce", "PositionSensor", "VelocitySensor",
+           "AccelerationSensor", "ForceSensor", "TranslationalPowerSensor"]
