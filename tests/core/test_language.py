@@ -135,3 +135,12 @@ def test_compiled_model_saves_and_loads(tmp_path):
     np.testing.assert_array_equal(a.values, b.values)
     with pytest.raises(mt.errors.DataError, match="no such file"):
         mt.CompiledModel.load(tmp_path / "missing.mtc")
+
+
+def test_system_rejects_part_names_that_shadow_its_methods():
+    from mechatron.library import electrical as el
+    m = mt.System("s")
+    for name in ("add", "connect", "equations", "_values"):
+        with pytest.raises(mt.errors.ModelError, match="method or attribute"):
+            m.add(name, el.Resistor())
+    m.add("r1", el.Resistor())

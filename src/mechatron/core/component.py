@@ -262,6 +262,9 @@ class System(Component):
                              "letters, digits and underscores.")
         if name in self._children or name in type(self)._declarations:
             raise ModelError(f"System '{self._name}': a part named '{name}' exists already.")
+        if hasattr(type(self), name) or name.startswith("_"):
+            raise ModelError(f"System '{self._name}': '{name}' is the name of a System "
+                             "method or attribute; choose another name for the part.")
         if not isinstance(element, Element):
             raise TypeError(f"System.add: expected a Component, got {element!r}.")
         if element._parent is not None:
