@@ -24,3 +24,29 @@ class OnePort(Component, partial=True):
         return [self.v == self.p.v - self.n.v,
                 self.p.i + self.n.i == 0,
                 self.i == self.p.i]
+
+
+class TwoPort(Component, partial=True):
+    """Four pins forming two ports: port 1 (``p1``, ``n1``) and port 2 (``p2``, ``n2``).
+
+    Equations: ``v1 = p1.v - n1.v``, ``p1.i + n1.i == 0``, ``i1 = p1.i`` and the same for
+    port 2. Each current is positive flowing into the component at its ``p`` pin, so
+    ``v1 i1 + v2 i2`` is the power absorbed.
+    """
+
+    p1 = Pin(doc="Positive pin of port 1")
+    n1 = Pin(doc="Negative pin of port 1")
+    p2 = Pin(doc="Positive pin of port 2")
+    n2 = Pin(doc="Negative pin of port 2")
+    v1 = Variable("V", doc="Voltage of port 1, p1.v - n1.v")
+    i1 = Variable("A", doc="Current into p1 (and out of n1)")
+    v2 = Variable("V", doc="Voltage of port 2, p2.v - n2.v")
+    i2 = Variable("A", doc="Current into p2 (and out of n2)")
+
+    def equations(self):
+        return [self.v1 == self.p1.v - self.n1.v,
+                self.p1.i + self.n1.i == 0,
+                self.i1 == self.p1.i,
+                self.v2 == self.p2.v - self.n2.v,
+                self.p2.i + self.n2.i == 0,
+                self.i2 == self.p2.i]
