@@ -1,0 +1,244 @@
+"""The closed loop of the HIL experiments: plant and controller step functions, and MIL.
+
+Three CasADi functions describe everything that runs per step; the same functions are
+simulated together on the desktop (model-in-the-loop, :func:`run_mil`) and generated as C
+for the separate plant and controller processes (SIL) or the firmware (PIL):
+
+``plant_out(x) -> meas``
+    Measurements at the current point: ``[count, w, phi, v_c, i]`` (encoder count,
+    speed in rad/s, angle in rad, RC filter voltage, armature current).
+``plant_step(x, duty, k) -> x_next``
+    One fixed-step solver step (``mechatron.solvers.fixed.make_step`` of the compiled
+    :class:`~mechatron.realtime.plant.HILPlant`; trapezoidal by default, A-stable for the
+    48 us armature time constant at any rate, where RK4 diverges below ~7 kHz) over
+    ``[k dt, (k+1) dt]`` with the pin
+    voltage set to the PWM average over that step (:func:`~mechatron.realtime.plant.pwm_average`).
+``ctrl_step(xc, count, k, valid) -> (xc_next, out)``
+    The discrete controller, ``out = [duty, ref, y_meas, u]``.
+
+Timing of one step ``k`` (identical in MIL, SIL and PIL): the plant samples the encoder
+at ``t_k``, the controller turns that count into a duty ``d_k``, and the plant applies
+``d_k`` over ``[t_k, t_k+1]``. In SIL/PIL a duty that has not arrived by the plant's
+reply deadline is replaced by the previous one (a *missed* step).
+
+The controller (written as a CasADi difference equation; ``mechatron.library.blocks``
+has no discrete PI yet)::
+
+    y_meas = w_meas   (speed)  or  phi_meas = 2 pi count / (4 lines)   (position)
+    w_meas = 2 pi (count_k - count_{k-M}) / (4 lines M dt)
+             (M = max(2, round(window_s / dt)) samples: 10 at 10 kHz)
+    e = ref(t_k) - y_meas
+    u = Kp e + I - Kd w_meas,   u_sat = min(max(u, -V_s), V_s)
+    I_{k+1} = I + Ki dt e   unless u is saturated and e pushes further (clamping)
+    duty = 1/2 + u_sat / (2 V_s)      (locked anti-phase H-bridge: 1/2 is 0 V)
+
+``valid = 0`` marks a sample lost on the way: the controller then extrapolates the count
+from its window, ``count_k = count_{k-1} + (count_{k-1} - count_{k-M}) / (M - 1)``, and
+runs as usual, so its integrator and window stay on the plant's time base.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+import mechatron as mt
+from mechatron.errors import SimulationError
+from mechatron.realtime.plant import PLANT_DEFAULTS, build_plant, pwm_average
+from mechatron.solvers.fixed import make_step
+from mechatron.solvers.initial import initialize
+
+__all__ = ["Experiment", "EXPERIMENTS", "LoopFunctions", "build_loop", "run_mil",
+           "MEAS_NAMES", "CTRL_OUT_NAMES", "window_samples"]
+
+MEAS_NAMES = ("count", "w", "phi", "v_c", "i")
+CTRL_OUT_NAMES = ("duty", "ref", "y_meas", "u")
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One HIL experiment: what is controlled, the reference, the controller gains.
+
+    ``reference`` is a tuple of ``(t_start, value)`` steps (the value holds until the
+    next step; 0 before the first); ``quantity`` is ``"speed"`` (rad/s) or
+    ``"position"`` (rad).
+    """
+
+    name: str
+    quantity: str
+    reference: tuple[tuple[float, float], ...]
+    Kp: float
+    Ki: float
+    Kd: float = 0.0
+    window_s: float = 1e-3     # length of the speed estimate's window, in s
+    unit: str = "rad/s"
+    doc: str = ""
+
+    @property
+    def ref_scale(self) -> float:
+        """The size of the reference (largest |value|), the scale of ``rms_diff_percent``."""
+        return max(abs(v) for _, v in self.reference)
+
+    def ref_at(self, t):
+        """The reference at times ``t`` (NumPy)."""
+        t = np.asarray(t, dtype=float)
+        r = np.zeros_like(t)
+        for t0, v in self.reference:
+            r = np.where(t >= t0 - 1e-12, v, r)
+        return r
+
+
+EXPERIMENTS = {
+    "speed": Experiment(
+        "speed", "speed", ((0.05, 80.0), (1.0, 40.0), (1.5, 100.0)), Kp=0.05, Ki=30.0,
+        unit="rad/s",
+        doc="PI speed control: steps to 80, 40 and 100 rad/s (motor limit ~122 rad/s)."),
+    "position": Experiment(
+        "position", "position", ((0.05, 10.0), (1.0, 4.0), (1.5, 12.0)), Kp=10.0, Ki=0.0,
+        Kd=0.02, unit="rad",
+        doc="PD position control with saturation: angle steps to 10, 4 and 12 rad."),
+}
+
+
+@dataclass
+class LoopFunctions:
+    """The three step functions of one experiment, with their start values."""
+
+    experiment: Experiment
+    dt: float
+    f_pwm: float
+    method: str
+    plant_out: ca.Function
+    plant_step: ca.Function
+    ctrl_step: ca.Function
+    plant_x0: ca.Function          # () -> x0, for the generated code
+    ctrl_x0: ca.Function
+    x0: np.ndarray
+    xc0: np.ndarray
+    state_names: list[str] = field(default_factory=list)
+    lines: int = PLANT_DEFAULTS["lines"]
+
+
+def window_samples(exp: Experiment, dt: float) -> int:
+    """Samples ``M`` of the speed window at step ``dt`` (at least 2)."""
+    return max(2, int(round(exp.window_s / dt)))
+
+
+def _ref_expr(exp: Experiment, t):
+    r = ca.SX(0)
+    for t0, v in exp.reference:
+        r = ca.if_else(t >= t0 - 1e-12, v, r)
+    return r
+
+
+def build_loop(experiment: str | Experiment = "speed", *, rate: float = 10_000.0,
+               f_pwm: float = PLANT_DEFAULTS["f_pwm"], method: str = "trapezoidal",
+               lines: int = PLANT_DEFAULTS["lines"], **plant_params) -> LoopFunctions:
+    """Build the plant and controller step functions of an experiment at ``rate`` Hz."""
+    exp = EXPERIMENTS.get(experiment) if isinstance(experiment, str) else experiment
+    if exp is None:
+        raise SimulationError(f"hil: unknown experiment '{experiment}'. Choose one of "
+                              f"{', '.join(EXPERIMENTS)}.")
+    if not (math.isfinite(rate) and rate > 0):
+        raise SimulationError(f"hil: the rate must be a number of Hz > 0, got {rate!r}.")
+    if not (math.isfinite(f_pwm) and f_pwm > 0):
+        raise SimulationError(f"hil: the PWM frequency must be > 0 Hz, got {f_pwm!r}.")
+    dt = 1.0 / rate
+    if not (exp.window_s > 0):
+        raise SimulationError(f"hil experiment '{exp.name}': the speed window must be "
+                              f"> 0 s, got {exp.window_s!r}.")
+    cm = mt.compile_model(build_plant(**plant_params))
+    step = make_step(cm, method, dt)
+    p0 = cm.parameter_vector()
+    X0, z0, _ = initialize(cm, p0)
+    ipwm = cm.param_names.index("pwm.V")
+    V_io = float(p0[cm.param_names.index("bridge.V_io")])
+    V_s = float(p0[cm.param_names.index("bridge.V_s")])
+    idx = {n: cm.state_names.index(n) for n in
+           ("c_f.v", "inductor.i", "inertia.w", "encoder.phi")}
+    cpr = 4 * int(lines)                     # counts per revolution
+
+    x = ca.SX.sym("x", cm.nX + cm.nz)
+    duty = ca.SX.sym("duty")
+    k = ca.SX.sym("k")
+    count = ca.floor(x[idx["encoder.phi"]] * cpr / (2 * math.pi))
+    meas = ca.vertcat(count, x[idx["inertia.w"]], x[idx["encoder.phi"]], x[idx["c_f.v"]],
+                      x[idx["inductor.i"]])
+    plant_out = ca.Function("plant_out", [x], [meas], ["x"], ["meas"])
+    p = ca.SX(ca.DM(p0))
+    p[ipwm] = pwm_average(duty, k, dt, f_pwm, V_io)
+    x_next, _ = step(x, ca.SX(0, 1), p, k * dt)
+    plant_step = ca.Function("plant_step", [x, duty, k], [x_next],
+                             ["x", "duty", "k"], ["x_next"])
+
+    M = window_samples(exp, dt)
+    xc = ca.SX.sym("xc", 1 + M)           # [integrator; counts k-1 ... k-M]
+    c_in = ca.SX.sym("count")
+    valid = ca.SX.sym("valid")
+    integ, hist = xc[0], xc[1:]
+    c_ext = hist[0] + (hist[0] - hist[M - 1]) / (M - 1)
+    c = ca.if_else(valid > 0.5, c_in, c_ext)
+    w_meas = 2 * math.pi * (c - hist[M - 1]) / (cpr * M * dt)
+    y_meas = w_meas if exp.quantity == "speed" else 2 * math.pi * c / cpr
+    ref = _ref_expr(exp, k * dt)
+    e = ref - y_meas
+    u = exp.Kp * e + integ - exp.Kd * w_meas
+    u_sat = ca.fmin(ca.fmax(u, -V_s), V_s)
+    windup = ca.logic_or(ca.logic_and(u > V_s, e > 0), ca.logic_and(u < -V_s, e < 0))
+    integ_next = ca.if_else(windup, integ, integ + exp.Ki * dt * e)
+    duty_out = 0.5 + u_sat / (2 * V_s)
+    xc_next = ca.vertcat(integ_next, c, hist[:M - 1])
+    out = ca.vertcat(duty_out, ref, y_meas, u)
+    ctrl_step = ca.Function("ctrl_step", [xc, c_in, k, valid], [xc_next, out],
+                            ["xc", "count", "k", "valid"], ["xc_next", "out"])
+    x0 = np.concatenate([np.asarray(X0, float), np.asarray(z0, float)])
+    count0 = math.floor(x0[idx["encoder.phi"]] * cpr / (2 * math.pi))
+    xc0 = np.concatenate([[0.0], np.full(M, float(count0))])
+    return LoopFunctions(
+        experiment=exp, dt=dt, f_pwm=f_pwm, method=method, plant_out=plant_out,
+        plant_step=plant_step, ctrl_step=ctrl_step,
+        plant_x0=ca.Function("plant_x0", [], [ca.DM(x0)], [], ["x0"]),
+        ctrl_x0=ca.Function("ctrl_x0", [], [ca.DM(xc0)], [], ["xc0"]),
+        x0=x0, xc0=xc0, state_names=list(cm.state_names), lines=int(lines))
+
+
+#: Columns of a MIL/SIL log, in order (the C runner writes the same).
+LOG_COLUMNS = ("t", "duty", "ref", "count", "w", "phi", "v_c", "i")
+
+
+def run_mil(loop: LoopFunctions, steps: int) -> dict[str, np.ndarray]:
+    """Model-in-the-loop: plant and controller in one native loop (``mapaccum``).
+
+    Returns the log by column (:data:`LOG_COLUMNS`), one row per step ``k``: the plant's
+    measurements at ``t_k`` and the duty applied over ``[t_k, t_k+1]``.
+    """
+    if steps < 1:
+        raise SimulationError(f"hil MIL: need at least one step, got {steps}.")
+    nx = loop.x0.size
+    nxc = loop.xc0.size
+    X = ca.SX.sym("X", nx + nxc + 1)          # [x; xc; k]
+    x, xc, k = X[:nx], X[nx:nx + nxc], X[nx + nxc]
+    meas = loop.plant_out(x)
+    xc_next, out = loop.ctrl_step(xc, meas[0], k, 1)
+    x_next = loop.plant_step(x, out[0], k)
+    row = ca.vertcat(k * loop.dt, out[0], out[1], meas)
+    f = ca.Function("mil_step", [X], [ca.vertcat(x_next, xc_next, k + 1), row])
+    chunk = 2000
+    runs: dict[int, ca.Function] = {}
+    state = np.concatenate([loop.x0, loop.xc0, [0.0]])
+    rows = []
+    done = 0
+    while done < steps:     # Python runs once per chunk of native steps, not per step
+        m = min(chunk, steps - done)
+        if m not in runs:
+            runs[m] = f.mapaccum(f"mil_run_{m}", m)
+        xs, ys = runs[m](state)
+        xs = np.array(xs, dtype=float).reshape(-1, m)
+        rows.append(np.array(ys, dtype=float).reshape(-1, m))
+        state = xs[:, -1]
+        done += m
+    Y = np.hstack(rows)
+    return {name: Y[i] for i, name in enumerate(LOG_COLUMNS)}
