@@ -23,7 +23,7 @@ def newton(alpha, m, k_s, b, mu=0.0, F=0.0):
 
 
 @pytest.mark.parametrize("name", CASES)
-@pytest.mark.parametrize("variant", ["acausal", "equation"])
+@pytest.mark.parametrize("variant", ["acausal", "equation", "multibody"])
 def test_trajectory_matches_scipy(name, variant):
     entry = mt.models.get(name)
     t = np.linspace(0, 5, 201)

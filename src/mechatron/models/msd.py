@@ -1,10 +1,13 @@
 """The seed's three mass-spring-damper cases (its section 5.3, equations 11-13).
 
-A mass ``m`` on a spring ``k_s`` and a damper ``b`` to the frame, each case in two variants
-(a third, multibody, joins when the planar multibody library provides it):
+A mass ``m`` on a spring ``k_s`` and a damper ``b`` to the frame, each case in three
+variants, as the seed does it:
 
 * ``acausal``: library parts (mass, spring, damper, friction, force sources) connected;
-* ``equation``: the seed's differential equation written as a user component.
+* ``equation``: the seed's differential equation written as a user component;
+* ``multibody``: a planar point mass on a prismatic joint tilted by the slope angle, with
+  gravity acting on the body in the plane; the spring, damper, friction and applied force
+  act on the joint's translational axis (Simscape Multibody's joint actuation).
 
 ``y`` is the mass's displacement from the spring's free length, positive in the direction
 of the applied force (horizontal), down the slope (incline), or down (vertical).
@@ -30,6 +33,7 @@ import casadi as ca
 
 import mechatron as mt
 from mechatron.library import blocks
+from mechatron.library import multibody as mb
 from mechatron.library import translational as tr
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
@@ -112,7 +116,27 @@ def _builders(alpha: float, with_force: bool, with_friction: bool):
         model._name = "msd"
         return model
 
-    return {"acausal": acausal, "equation": equation}
+    def multibody(m, k_s, b, mu=0.0, F=0.0):
+        model = mt.System("msd", doc="mass-spring-damper, planar multibody")
+        world = model.add("world", mb.World())
+        # the joint's axis points down the slope: gravity pulls along +y with m g sin(alpha)
+        joint = model.add("joint", mb.ActuatedPrismatic(angle=-alpha, s=0.0, v=0.0))
+        mass = model.add("mass", mb.PointMass(m=m, g=G))
+        normal = m * G * math.cos(alpha)
+        coulomb = mu * normal if with_friction else 0.0
+        spring = model.add("spring", tr.TranslationalSpring(k=k_s))
+        damper = model.add("damper", tr.TranslationalDamper(b=b))
+        friction = model.add("friction", tr.TranslationalFriction(
+            F_brk=coulomb, F_C=coulomb, v_brk=10 * V_COULOMB, b=0.0))
+        force = model.add("force", tr.ConstantForce(F=F if with_force else 0.0))
+        ground = model.add("ground", tr.TranslationalReference())
+        model.connect(world.frame, joint.frame_a)
+        model.connect(joint.frame_b, mass.frame)
+        model.connect(joint.axis, spring.A, damper.A, friction.A, force.A)
+        model.connect(spring.B, damper.B, friction.B, force.B, ground.port)
+        return model
+
+    return {"acausal": acausal, "equation": equation, "multibody": multibody}
 
 
 def _params(with_force: bool, with_friction: bool) -> dict[str, ParameterInfo]:
@@ -127,9 +151,10 @@ def _params(with_force: bool, with_friction: bool) -> dict[str, ParameterInfo]:
 
 
 _OUTPUTS = {"acausal": {"y": "spring.x", "v": "mass.v"},
-            "equation": {"y": "y", "v": "v"}}
+            "equation": {"y": "y", "v": "v"},
+            "multibody": {"y": "joint.s", "v": "joint.v"}}
 _EXPERIMENT = Experiment(t_stop=20.0, rtol=1e-10, atol=1e-12)
-_TAGS = ("seed", "mechanical", "translational", "mass-spring-damper")
+_TAGS = ("seed", "mechanical", "translational", "multibody", "mass-spring-damper")
 
 ALPHA_INCLINE = math.radians(60.0)
 
