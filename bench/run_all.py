@@ -20,10 +20,17 @@ from pathlib import Path
 import _common  # noqa: F401  (import path)
 from _common import dumps, environment, log
 
+import bench_codegen
 import bench_dc_motor
+import bench_estimation
+import bench_multibody
+import bench_pwm
+import bench_realtime
 import bench_scaling
 
-BENCHMARKS = {"dc_motor": bench_dc_motor.run, "scaling": bench_scaling.run}
+BENCHMARKS = {"dc_motor": bench_dc_motor.run, "pwm": bench_pwm.run, "scaling": bench_scaling.run,
+              "codegen": bench_codegen.run, "realtime": bench_realtime.run,
+              "multibody": bench_multibody.run, "estimation": bench_estimation.run}
 
 
 def _summary(results: dict) -> dict:
@@ -66,6 +73,25 @@ def _summary(results: dict) -> dict:
                          "compile_growth_exponents": [e["exponent"] for e in
                                                       data["growth_exponents"]["compile"]],
                          "compile_goals": data["compile_goals"]}
+    pw = results.get("pwm")
+    if pw and "error" not in pw:
+        out["pwm"] = {"us_per_event": [r["us_per_event"] for r in pw["rows"]],
+                      "events": [r["events"] for r in pw["rows"]],
+                      "us_per_event_growth": pw["us_per_event_growth"],
+                      "rel_err_mean_current": pw["rows"][-1]["rel_err_mean_current"]}
+    mb = results.get("multibody")
+    if mb and "error" not in mb:
+        out["multibody"] = {
+            case: {"compile_s": mb[case]["compile"]["time"]["median_s"],
+                   "simulate_s": mb[case]["mechatron"]["simulate"]["median_s"],
+                   **{name: b["time"]["median_s"] for name, b in mb[case]["scipy"].items()}}
+            for case in ("double_pendulum", "four_bar")}
+    cg = results.get("codegen")
+    if cg and "error" not in cg:
+        out["codegen"] = {"dc_motor_rk4_ns": cg["dc_motor_rk4_ns"], "goal_ns": cg["goal_ns"],
+                          "ns_per_step": {name: ([r["ns_per_step"] for r in rows]
+                                                 if isinstance(rows, list) else None)
+                                          for name, rows in cg["models"].items()}}
     return out
 
 

@@ -284,7 +284,7 @@ def rtcheck(model, *, rate: float, t_stop: float | None = None, params: dict | N
                     err = math.inf
                 candidates.append(Candidate(solver, h, it, m, err,
                                             _stable(solver, h, eigs)))
-    _timing(cm, candidates, p, measure, timing_steps, workdir, rate)
+    _timing(cm, candidates, params, measure, timing_steps, workdir, rate)
     for c in candidates:
         c.ok = (c.max_error <= tolerance
                 and (c.margin is None or c.margin >= min_margin))
@@ -319,7 +319,7 @@ def _stiffness(eigs: np.ndarray, T: float, solvers) -> dict:
             "explicit_stable_at_rate": bool(explicit_ok)}
 
 
-def _timing(cm, candidates, p, measure, steps, workdir, rate) -> None:
+def _timing(cm, candidates, params, measure, steps, workdir, rate) -> None:
     """ns per step of the compiled C of each (solver, iterations), and the margins."""
     if not measure:
         return
@@ -332,11 +332,9 @@ def _timing(cm, candidates, p, measure, steps, workdir, rate) -> None:
             if key not in cache:
                 d = base / f"{c.solver}_{c.iterations or 0}"
                 code = generate_c(cm, d, solver=c.solver, dt=c.dt,
-                                  iterations=c.iterations or 1, params=None,
-                                  name=f"{cm.name}_rt")
-                code_p = code
-                build(code_p)
-                cache[key] = measure_ns_per_step(code_p, steps=steps)["ns_per_step"]
+                                  iterations=c.iterations or 1, params=params)
+                build(code)
+                cache[key] = measure_ns_per_step(code, steps=steps)["ns_per_step"]
             c.ns_per_step = cache[key]
             c.margin = 1.0 - c.steps_per_period * c.ns_per_step * 1e-9 * rate
 

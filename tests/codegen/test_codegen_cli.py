@@ -1,0 +1,53 @@
+"""The `codegen` command and the demo's code-generation step."""
+
+import json
+from types import SimpleNamespace
+
+import pytest
+
+import mechatron.codegen as codegen
+from mechatron.cli import main
+
+
+@pytest.fixture
+def run(capsys):
+    def _run(*args):
+        code = main(list(args))
+        out = capsys.readouterr()
+        return SimpleNamespace(returncode=code, stdout=out.out, stderr=out.err)
+    return _run
+
+
+def test_codegen_command_writes_builds_and_checks(run, tmp_path):
+    proc = run("codegen", "dc_motor", "--solver", "backward_euler", "--iterations", "2",
+               "--dt", "1e-4", "--t-stop", "0.05", "--set", "V=12", "--out", str(tmp_path),
+               "--check", "--json")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["max_rel_difference_to_desktop"] <= 1e-12
+    assert doc["steps"] == 500 and doc["ns_per_step"] > 0
+    for name in ("dc_motor.h", "dc_motor.c", "dc_motor_casadi.c", "dc_motor_main.c",
+                 "Makefile"):
+        assert (tmp_path / name).exists()
+    # --set became the default of the generated code
+    assert "12.0" in (tmp_path / "dc_motor.c").read_text()
+
+
+def test_codegen_command_errors(run, tmp_path):
+    proc = run("codegen", "dc_motor", "--out", str(tmp_path))
+    assert proc.returncode == 2 and "--dt" in proc.stderr
+    proc = run("codegen", "dc_motor", "--dt", "-1", "--out", str(tmp_path))
+    assert proc.returncode == 2 and "step size" in proc.stderr
+    proc = run("codegen", "dc_motor", "--solver", "rk5", "--dt", "1e-4", "--out",
+               str(tmp_path))
+    assert proc.returncode == 2
+
+
+def test_demo_run_generates_compiles_and_runs_the_dc_motor(tmp_path):
+    pytest.importorskip("fmpy")
+    d = codegen.demo_run(tmp_path)
+    assert d["max_rel_difference"] <= 1e-12
+    assert d["final_w"] == pytest.approx(d["analytic_w"], rel=1e-6)
+    assert d["ns_per_step"] > 0 and d["steps"] == 1000
+    assert d["fmu_check"]["validation_problems"] == []
+    assert d["fmu_check"]["max_rel_difference_to_desktop"] <= 1e-6
