@@ -1,0 +1,227 @@
+"""The BLDC drive of the database (``bldc_motor``): Hall sectors, six-step currents, torque
+constant, speed regulation, energy balance, and switched against averaged PWM.
+
+Every check compares with an analytic fact of the drive (the sector as a function of the
+rotor angle, ``T = k_e (i_high - i_low)`` on the back-EMF flat tops, the leakage bound of
+an open inverter leg, Newton's law averaged over whole turns, conservation of energy), not
+with numbers taken from a previous run.
+"""
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import mechatron as mt
+from mechatron.errors import ModelError
+from mechatron.models.compare import compare_variants
+from mechatron.models.bldc import COMMUTATION, ENTRY, trapezoid
+
+P = ENTRY.values()                     # SI defaults
+T_SETTLE = 0.06                        # s: the speed loop has settled (design: ~40 ms)
+T_STOP = 0.2
+PHASES = "abc"
+FETS = [f"q_{k}{s}" for k in PHASES for s in "hl"]
+
+
+def expected_sector(theta_e):
+    """Sector s covers electrical angles [30 + 60 (s - 1), 90 + 60 (s - 1)) degrees."""
+    x = np.mod(np.asarray(theta_e) - math.pi / 6, 2 * math.pi)
+    return 1 + np.floor(x / (math.pi / 3))
+
+
+@pytest.fixture(scope="module")
+def run():
+    """The acausal drive with averaged PWM, 0.2 s on a fine grid."""
+    t = np.linspace(0.0, T_STOP, 20001)
+    return mt.simulate(ENTRY.build("acausal"), T_STOP, rtol=1e-8, atol=1e-10, t_out=t)
+
+
+def steady(res):
+    return res.t >= T_SETTLE
+
+
+def away_from_commutation(res, margin=1.5e-3):
+    """Samples after settling, not within ``margin`` s after a sector change, and with no
+    body diode conducting."""
+    t, s = res.t, res["hall.sector"]
+    changes = t[1:][np.diff(s) != 0]
+    since = np.full(t.shape, np.inf)
+    for tc in changes:
+        after = t >= tc
+        since[after] = np.minimum(since[after], t[after] - tc)
+    return steady(res) & (since > margin) & ~diode_conducts(res)
+
+
+def diode_conducts(res):
+    """A body diode carries current (the logged diode currents of blocked diodes are
+    rounding noise below 1e-12 A)."""
+    return sum(np.abs(res[f"{q}.i_d"]) for q in FETS) > 1e-9
+
+
+def test_trapezoid_is_the_clipped_triangle_wave():
+    x = np.linspace(-4 * math.pi, 4 * math.pi, 4001)
+    ref = np.clip(np.arcsin(np.sin(x)) / (math.pi / 6), -1, 1)
+    X = ca.SX.sym("x")
+    f = ca.Function("f", [X], [trapezoid(X)])
+    np.testing.assert_allclose(np.array(f(x)).ravel(), ref, atol=1e-12)
+    np.testing.assert_allclose([trapezoid(float(v)) for v in x], ref, atol=1e-12)
+    # finite slope everywhere (the asin form has an infinite one at the peaks)
+    df = ca.Function("df", [X], [ca.jacobian(trapezoid(X), X)])
+    slopes = np.array(df(np.array([-math.pi / 2, math.pi / 2, 3 * math.pi / 2]))).ravel()
+    assert np.all(np.isfinite(slopes))
+
+
+def test_hall_sectors_follow_the_rotor_angle_in_order(run):
+    theta = run["winding.theta"]            # one pole pair: electrical = mechanical
+    sector = run["hall.sector"]
+    # away from the edges (grid resolution) the sector is the analytic one
+    edge = np.abs(np.mod(theta - math.pi / 6 + 1e-9, math.pi / 3))
+    clear = (edge > 1e-3) & (edge < math.pi / 3 - 1e-3)
+    np.testing.assert_array_equal(sector[clear], expected_sector(theta[clear]))
+    # at constant speed the sequence runs 1, 2, ..., 6, 1, ... through every sector
+    m = steady(run)
+    s = sector[m]
+    changes = np.nonzero(np.diff(s))[0]
+    seq = s[np.concatenate([[0], changes + 1])]
+    assert len(seq) >= 12 and set(seq) == {1, 2, 3, 4, 5, 6}
+    np.testing.assert_array_equal(np.mod(np.diff(seq), 6), 1)
+    # each complete visit spans 60 electrical degrees (to the grid's angle resolution)
+    th = theta[m]
+    starts = th[changes + 1]
+    resolution = run["rotor.w"].max() * (run.t[1] - run.t[0])
+    np.testing.assert_allclose(np.diff(starts), math.pi / 3, atol=1.01 * resolution)
+
+
+def test_speed_settles_within_two_percent_of_the_reference(run):
+    w, w_ref = run["rotor.w"], P["w_ref"]
+    m = steady(run)
+    assert np.max(np.abs(w[m] - w_ref)) <= 0.02 * w_ref
+    # integral action: the mean over the last whole electrical turns is the reference
+    theta = run["winding.theta"]
+    turns = np.floor(theta / (2 * math.pi))
+    last = (turns >= turns[-1] - 2) & (turns < turns[-1])
+    assert np.mean(w[last]) == pytest.approx(w_ref, rel=1e-3)
+
+
+def test_phase_currents_show_six_step_commutation(run):
+    """Per sector exactly two phases conduct, equal and opposite; the third carries only
+    the leakage of its open leg, |G_off (V_p - 2 u)| <= G_off V_p, between commutations;
+    body diodes conduct only right after a commutation (the outgoing phase's current)."""
+    m = away_from_commutation(run)
+    assert m.sum() > 5000
+    sector = run["hall.sector"][m]
+    V_p = run["supply.v"][m]
+    leak = P["G_off"] * V_p * (1 + 1e-6)
+    currents = {k: run[f"winding.i_{k}"][m] for k in PHASES}
+    for s, (hi, lo) in COMMUTATION.items():
+        sel = sector == s
+        assert sel.sum() > 200, s
+        floating = ({"a", "b", "c"} - {hi, lo}).pop()
+        i_hi, i_lo, i_fl = currents[hi][sel], currents[lo][sel], currents[floating][sel]
+        assert np.all(np.abs(i_fl) <= leak[sel])
+        assert np.all(np.abs(i_hi + i_lo) <= leak[sel])
+        assert np.all(i_hi > 20 * leak[sel])        # motoring: into the high phase
+    # no switch ever sees more than the link voltage plus a diode drop: the outgoing
+    # phase's current is taken over by a diode at once, not forced through G_off
+    for q in FETS:
+        v = run[f"{q}.v"]
+        assert v.max() < P["V_dc"] + 1.0 and v.min() > -2.0, q
+    # the diodes carry current only within 1 ms after a sector change (outgoing phase)
+    t, s = run.t, run["hall.sector"]
+    changes = t[1:][np.diff(s) != 0]
+    conducting = t[diode_conducts(run) & steady(run)]
+    assert conducting.size > 0
+    lag = np.array([tc - changes[changes <= tc].max() for tc in conducting])
+    assert lag.max() < 1e-3
+
+
+def test_torque_is_two_ke_times_the_phase_current(run):
+    """On the flat tops, T = k_e (i_high - i_low) = 2 k_e I (plus k_e f i of the floating
+    phase's leakage); and over whole turns in steady state the mean electromagnetic torque
+    balances load and friction (J dw/dt averages to the change of speed)."""
+    m = away_from_commutation(run)
+    sector = run["hall.sector"][m]
+    T = run["winding.T"][m]
+    bound = P["k_e"] * P["G_off"] * run["supply.v"][m] * (1 + 1e-6)
+    checked = 0
+    for s, (hi, lo) in COMMUTATION.items():
+        sel = sector == s
+        I = (run[f"winding.i_{hi}"][m][sel] - run[f"winding.i_{lo}"][m][sel]) / 2
+        assert np.all(np.abs(T[sel] - 2 * P["k_e"] * I) <= bound[sel])
+        checked += sel.sum()
+    assert checked == m.sum()
+    # Newton, averaged over the last two whole turns
+    theta, t, w = run["winding.theta"], run.t, run["rotor.w"]
+    turns = np.floor(theta / (2 * math.pi))
+    last = (turns >= turns[-1] - 2) & (turns < turns[-1])
+    i0, i1 = np.nonzero(last)[0][[0, -1]]
+    span = t[i1] - t[i0]
+    mean_T = np.trapezoid(run["winding.T"][i0:i1 + 1], t[i0:i1 + 1]) / span
+    mean_load = P["T_load"] + P["B"] * np.trapezoid(w[i0:i1 + 1], t[i0:i1 + 1]) / span
+    inertial = P["J"] * (w[i1] - w[i0]) / span
+    assert mean_T == pytest.approx(mean_load + inertial, rel=1e-4)
+
+
+def test_energy_balance(run):
+    """Energy from the DC link = stored magnetic and kinetic energy + losses in the
+    windings, switches and diodes, friction + work on the load."""
+    t = run.t
+    integral = lambda y: np.trapezoid(y, t)                              # noqa: E731
+    supplied = integral(-run["supply.v"] * run["supply.i"])
+    i2 = sum(run[f"winding.i_{k}"] ** 2 for k in PHASES)
+    w = run["rotor.w"]
+    stored = 0.5 * P["L"] * (i2[-1] - i2[0]) + 0.5 * P["J"] * (w[-1] ** 2 - w[0] ** 2)
+    losses = integral(P["R"] * i2 + sum(run[f"{q}.v"] * run[f"{q}.i"] for q in FETS)
+                      + P["B"] * w ** 2 + P["T_load"] * w)
+    assert supplied > 0
+    # trapezoidal quadrature across the commutation jumps of a 10 us grid: ~1e-4
+    assert stored + losses == pytest.approx(supplied, rel=3e-4)
+
+
+def test_switched_pwm_agrees_with_the_averaged_model_on_average(run):
+    """Switched PWM (5 kHz, synchronous rectification) once: the same mean speed and
+    duty as the averaged model; the phase-current ripple of the PWM leg is the analytic
+    d (1 - d) V_dc / (2 L f) of a 2L inductance chopped at f."""
+    f = 5e3
+    t_stop = 0.1
+    t = np.linspace(0.0, t_stop, 10001)
+    res = mt.simulate(ENTRY.build("acausal", f_pwm=f), t_stop, rtol=1e-8, atol=1e-10,
+                      t_out=t)
+    # one event per PWM edge, two per period
+    assert res.stats.events["modulator"] == pytest.approx(2 * f * t_stop, abs=2)
+    window = (res.t >= T_SETTLE)
+    ref = (run.t >= T_SETTLE) & (run.t <= t_stop)
+    w_sw, w_av = np.mean(res["rotor.w"][window]), np.mean(run["rotor.w"][ref])
+    assert w_sw == pytest.approx(w_av, rel=1e-2)
+    assert w_sw == pytest.approx(P["w_ref"], rel=1e-2)
+    d_sw, d_av = np.mean(res["controller.d"][window]), np.mean(run["controller.d"][ref])
+    assert d_sw == pytest.approx(d_av, rel=1e-2)
+    # ripple: in the middle of a long sector, peak-to-peak over whole PWM periods
+    s = res["hall.sector"]
+    hi_phase = {sec: COMMUTATION[sec][0] for sec in COMMUTATION}
+    t_c = res.t[1:][np.diff(s) != 0]
+    t_c = t_c[t_c > T_SETTLE]
+    mid = 0.5 * (t_c[0] + t_c[1])
+    k = (res.t >= mid) & (res.t < mid + 4 / f)
+    i_hi = res[f"winding.i_{hi_phase[int(s[np.searchsorted(res.t, mid)])]}"][k]
+    d = np.mean(res["controller.d"][k])
+    ripple = d * (1 - d) * P["V_dc"] / (2 * P["L"] * f)
+    assert np.ptp(i_hi) == pytest.approx(ripple, rel=0.1)
+
+
+def test_switched_pwm_variants_agree():
+    """The switched network (library MOSFETs, comparator, gate drivers) and the switched
+    equations (switching function in closed-form leg solutions) through the start-up:
+    every PWM edge, commutation and diode event at the same instants, so the trajectories
+    agree to the integration tolerance."""
+    cmp = compare_variants(ENTRY, params={"f_pwm": 5e3}, t_stop=0.02, points=2001)
+    assert cmp.results["acausal"].stats.events["modulator"] == 200
+    for label, dev in cmp.deviations["equation"].items():
+        assert dev["max_rel"] <= 1e-5, (label, dev)
+
+
+def test_negative_pwm_frequency_is_rejected():
+    with pytest.raises(ModelError, match="f_pwm must be >= 0"):
+        ENTRY.build("acausal", f_pwm=-1.0)
