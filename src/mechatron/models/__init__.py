@@ -7,5 +7,6 @@
 
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import get, list, register  # noqa: A004
+from mechatron.models import dc_motor_control  # noqa: E402,F401  (registers its entries)
 
 __all__ = ["ModelEntry", "Experiment", "ParameterInfo", "get", "list", "register"]

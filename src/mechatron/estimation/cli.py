@@ -1,0 +1,280 @@
+"""``mechatron estimate``, ``mechatron sensitivity`` and ``mechatron optimize``.
+
+Each reads a TOML problem file (format: ``docs/estimation.md``), shows progress on stderr
+(a bar, or one line per step when stderr is not a terminal; ``--quiet`` silences it), and
+prints a summary, or with ``--json`` one JSON object on stdout. ``--out DIR`` writes the
+plots and the full result as JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mechatron.cli import add_json, emit, emit_json, table
+
+__all__ = ["add_commands", "Progress"]
+
+
+class Progress:
+    """A progress bar on stderr (``total`` known) or a step counter (``total`` None)."""
+
+    def __init__(self, label: str, total: int | None = None, *, enabled: bool = True):
+        self.label, self.total, self.enabled = label, total, enabled
+        self.tty = sys.stderr.isatty()
+        self.start = time.perf_counter()
+        self._last = 0.0
+
+    def update(self, done: int, text: str = "") -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        final = self.total is not None and done >= self.total
+        if self.tty and not final and now - self._last < 0.1:
+            return
+        self._last = now
+        if self.total:
+            frac = min(done / self.total, 1.0)
+            bar = "#" * int(30 * frac) + "-" * (30 - int(30 * frac))
+            line = f"{self.label} [{bar}] {done}/{self.total} {text}"
+        else:
+            line = f"{self.label}: {done} {text}"
+        line += f"  ({now - self.start:.1f} s)"
+        if self.tty:
+            print("\r" + line[:120].ljust(120), end="", file=sys.stderr, flush=True)
+        elif final or self.total is None or done % max(1, self.total // 10) == 0:
+            print(line, file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.enabled and self.tty:
+            print(file=sys.stderr, flush=True)
+
+
+def _out_dir(path: str | None) -> Path | None:
+    if path is None:
+        return None
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise NotADirectoryError(f"--out {p}: exists and is not a directory.")
+    p.mkdir(parents=True, exist_ok=True)
+    return p
+
+
+# ---------------------------------------------------------------------------- estimate
+def cmd_estimate(args: argparse.Namespace) -> int:
+    from mechatron.estimation.config import build_estimation, load_config
+    from mechatron.estimation.problem import estimate
+    cfg = load_config(args.config)
+    out = _out_dir(args.out)
+    t0 = time.perf_counter()
+    prob = build_estimation(cfg)
+    setup = time.perf_counter() - t0
+    bar = Progress("estimate", enabled=not args.quiet)
+    res = estimate(prob, max_iterations=args.max_iterations,
+                   callback=lambda k, th, cost: bar.update(k, f"(iteration), cost {cost:.6g}"))
+    bar.close()
+    doc = res.to_dict()
+    doc["setup_s"] = setup
+    doc["config"] = str(args.config)
+    files = []
+    if out is not None:
+        files.append(res.plot_fit(out / "estimate_fit.png"))
+        files.append(res.plot_trajectory(out / "estimate_trajectory.png"))
+        path = out / "estimate.json"
+        path.write_text(json.dumps(_plain(doc), indent=2))
+        files.append(path)
+        doc["files"] = [str(f) for f in files]
+    if args.json:
+        emit_json(doc)
+        return 0
+    emit(f"{cfg.get('title', args.config)}")
+    emit(f"  {len(prob.experiments)} experiment(s), {prob.n_residuals} residuals, "
+         f"{len(prob.names)} free; {res.iterations} iterations, {res.evaluations} "
+         f"simulations, {res.wall_time:.2f} s (+{setup:.2f} s setup); {res.message}")
+    emit(f"  cost {res.cost_initial:.6g} -> {res.cost:.6g}")
+    rows = []
+    for j, name in enumerate(res.names):
+        lo, hi = res.ci95[name]
+        rows.append([name, f"{res.initial[j]:.6g}", f"{res.values[j]:.6g}",
+                     f"[{lo:.6g}, {hi:.6g}]",
+                     f"{100 * res.std[j] / abs(res.values[j]):.2f}%" if res.values[j] else "-"])
+    emit(table(["parameter", "start", "estimate", "95% interval", "rel. std"], rows,
+               right="1234"))
+    emit("  fit (NRMSE, 0 = perfect): " + "; ".join(
+        f"{e}: " + ", ".join(f"{lab} {v0:.3g} -> {v:.3g}"
+                             for (lab, v), v0 in zip(d.items(), res.nrmse_initial[e].values()))
+        for e, d in res.nrmse.items()))
+    strong = [(res.names[a], res.names[b], res.correlation[a, b])
+              for a in range(len(res.names)) for b in range(a)
+              if abs(res.correlation[a, b]) > 0.9]
+    if strong:
+        emit("  strongly correlated: " + ", ".join(f"{a}/{b} {c:+.3f}" for a, b, c in strong))
+    for f in files:
+        emit(f"  wrote {f}")
+    return 0
+
+
+def _plain(obj):
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        return float(obj) if np.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.ndarray):
+        return _plain(obj.tolist())
+    return obj
+
+
+# ------------------------------------------------------------------------- sensitivity
+def cmd_sensitivity(args: argparse.Namespace) -> int:
+    from mechatron.estimation.config import build_sensitivity, load_config
+    from mechatron.estimation.sensitivity import run_sensitivity
+    cfg = load_config(args.config)
+    out = _out_dir(args.out)
+    prob, dists, opts = build_sensitivity(cfg)
+    n = args.samples or int(opts.get("samples", 64))
+    method = args.method or opts.get("method", "sobol")
+    workers = args.workers if args.workers is not None else opts.get("workers")
+    address = args.dask or opts.get("address")
+    total = n * (len(dists) + 2) if method == "sobol" else n
+    bar = Progress("sensitivity", total, enabled=not args.quiet)
+    res = run_sensitivity(prob, dists, n=n, method=method, seed=int(opts.get("seed", 0)),
+                          workers=workers, address=address, best=int(opts.get("best", 5)),
+                          progress=lambda done, tot: bar.update(done, "simulations"))
+    bar.close()
+    doc = res.to_dict()
+    files = []
+    if out is not None:
+        files = [res.plot_scatter(out / "sensitivity_scatter.png"),
+                 res.plot_tornado(out / "sensitivity_tornado.png")]
+        path = out / "sensitivity.json"
+        path.write_text(json.dumps(_plain(doc), indent=2))
+        files.append(path)
+        doc["files"] = [str(f) for f in files]
+    if args.json:
+        emit_json(doc)
+        return 0
+    emit(f"{cfg.get('title', args.config)}")
+    emit(f"  {res.evaluations} simulations ({method}, {n} base samples) in "
+         f"{res.wall_time:.2f} s: {res.throughput:.0f} simulations/s on "
+         f"{res.workers or 'a Dask cluster at ' + str(address)} worker(s); "
+         f"{res.failed} failed")
+    measure = res.ST if res.ST is not None else res.src
+    head = "total Sobol index" if res.ST is not None else "std. regression coef."
+    rows = []
+    for name in res.ranking:
+        j = res.names.index(name)
+        rows.append([name] + [f"{measure[j, a]:+.3f}" for a in range(len(res.requirements))]
+                    + [f"{res.spearman[j, a]:+.2f}" for a in range(len(res.requirements))])
+    emit(f"  ranking by {head} (then Spearman correlation), most important first:")
+    emit(table(["parameter"] + res.requirements + [f"rho {r}" for r in res.requirements],
+               rows, right="".join(str(k) for k in range(1, 2 * len(res.requirements) + 1))))
+    emit("  best samples (starting values for `mechatron estimate`):")
+    emit(table(res.names + ["cost"],
+               [[f"{b[nm]:.6g}" for nm in res.names] + [f"{b['cost']:.6g}"]
+                for b in res.best[:3]]))
+    for f in files:
+        emit(f"  wrote {f}")
+    return 0
+
+
+# ---------------------------------------------------------------------------- optimize
+def cmd_optimize(args: argparse.Namespace) -> int:
+    from mechatron.estimation.config import build_response, load_config
+    from mechatron.estimation.optimize import optimize_response, verify
+    cfg = load_config(args.config)
+    out = _out_dir(args.out)
+    prob = build_response(cfg)
+    bar = Progress("optimize", enabled=not args.quiet)
+    res = optimize_response(prob, max_iterations=args.max_iterations,
+                            callback=lambda k, x, f, v: bar.update(
+                                k, f"(iteration), objective {f:.4g}, violation {v:.3g}"))
+    bar.close()
+    before, after = verify(prob, res.initial), verify(prob, res.values)
+    doc = res.to_dict()
+    doc["requirements"] = [dict(r, start=b["value"], start_met=b["met"])
+                           for r, b in zip(after["rows"], before["rows"])]
+    doc["all_met"] = after["all_met"]
+    files = []
+    if out is not None:
+        files = [res.plot(out / "optimize_response.png")]
+        path = out / "optimize.json"
+        path.write_text(json.dumps(_plain(doc), indent=2))
+        files.append(path)
+        doc["files"] = [str(f) for f in files]
+    if args.json:
+        emit_json(doc)
+        return 0
+    emit(f"{cfg.get('title', args.config)}")
+    emit(f"  {res.iterations} SQP iterations in {res.wall_time:.2f} s; {res.message}")
+    emit(table(["design variable", "start", "optimized"],
+               [[n, f"{a:.6g}", f"{b:.6g}"] for n, a, b in
+                zip(res.names, res.initial, res.values)], right="12"))
+    emit("  requirements, checked by an independent variable-step simulation:")
+    emit(table(["requirement", "limit", "start", "optimized", "met"],
+               [[r["requirement"], f"{r['limit']:.4g} {r['unit']}",
+                 f"{b['value']:.4g}", f"{r['value']:.4g}", "yes" if r["met"] else "NO"]
+                for r, b in zip(after["rows"], before["rows"])], right="123"))
+    for f in files:
+        emit(f"  wrote {f}")
+    return 0 if after["all_met"] else 1
+
+
+# ------------------------------------------------------------------------------ parser
+def add_commands(sub) -> None:
+    """Add ``estimate``, ``sensitivity`` and ``optimize`` to the ``mechatron`` parser."""
+    p = sub.add_parser("estimate", help="estimate parameters from measured data",
+                       description="Weighted least-squares estimation of model parameters "
+                                   "from one or more measured experiments, with exact "
+                                   "derivatives; prints estimates, 95%% intervals, "
+                                   "correlations and the fit. The problem file format is "
+                                   "in docs/estimation.md.")
+    p.add_argument("config", metavar="FILE.toml", help="problem file")
+    p.add_argument("--out", metavar="DIR", help="write plots and the result as JSON here")
+    p.add_argument("--max-iterations", type=int, default=100, metavar="N",
+                   help="limit on solver iterations (default: %(default)s)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_json(p)
+    p.set_defaults(func=cmd_estimate)
+
+    p = sub.add_parser("sensitivity", help="Monte Carlo sensitivity of parameters",
+                       description="Sample parameter distributions, simulate every sample "
+                                   "against the measured data (in parallel), and rank the "
+                                   "parameters by Sobol indices or regression "
+                                   "coefficients; list the best samples as starting "
+                                   "values. Format: docs/estimation.md.")
+    p.add_argument("config", metavar="FILE.toml", help="problem file")
+    p.add_argument("--samples", type=int, metavar="N", help="base samples (file: samples)")
+    p.add_argument("--method", choices=("random", "lhs", "sobol"),
+                   help="sampling (file: method; default sobol)")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="local worker processes (default: one per CPU; 1: serial)")
+    p.add_argument("--dask", metavar="ADDRESS",
+                   help="evaluate on the Dask cluster at ADDRESS (needs dask.distributed)")
+    p.add_argument("--out", metavar="DIR", help="write plots and the result as JSON here")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_json(p)
+    p.set_defaults(func=cmd_sensitivity)
+
+    p = sub.add_parser("optimize", help="tune controller gains to requirements",
+                       description="Response optimization: tune design variables so that "
+                                   "the step response envelope and signal bounds are met, "
+                                   "with exact gradients; the result is checked by an "
+                                   "independent simulation. Exit code 1 if a requirement "
+                                   "is not met. Format: docs/estimation.md.")
+    p.add_argument("config", metavar="FILE.toml", help="problem file")
+    p.add_argument("--max-iterations", type=int, default=100, metavar="N",
+                   help="limit on SQP iterations (default: %(default)s)")
+    p.add_argument("--out", metavar="DIR", help="write the plot and the result as JSON here")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_json(p)
+    p.set_defaults(func=cmd_optimize)
+

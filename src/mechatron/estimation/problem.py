@@ -1,0 +1,698 @@
+"""Parameter estimation: weighted least squares over several experiments, exact derivatives.
+
+The problem
+-----------
+Free parameters ``theta`` (model parameters by path, optional output offsets, optional
+initial states per experiment) minimize ::
+
+    S(theta) = sum_e sum_l sum_k ( (y_l(t_k; theta) + b_l - ym_l[k]) / sigma_l )^2
+
+over experiments ``e``, measured outputs ``l`` and samples ``k``, where ``y`` is the model
+output on the sample grid (:class:`~mechatron.estimation.discretize.Trajectory`: Radau IIA
+substeps, measured inputs held between samples), ``b_l`` an optional sensor offset and
+``sigma_l`` the output's noise level (given by the experiment; otherwise the signal's
+peak-to-peak range, so that signals of different units count alike).
+
+The solver is Levenberg-Marquardt (Marquardt's diagonal scaling, Nielsen's damping
+update, steps clipped to the bounds) on the exact Jacobian ``dr/dtheta`` from the forward
+sensitivities of the discrete trajectory (:mod:`.discretize`): each trial point costs one
+simulation with sensitivities, and the normal equations are only ``q x q``. The decision
+variables are scaled by ``scale`` (default: the starting value) and a step changes none
+by more than ``max_step`` scales (a trust region: from a start off by a factor of 3 a
+full Gauss-Newton step can jump to a bound and into another valley). With
+``log_space=True`` positive parameters move in log space instead.
+
+Uncertainty
+-----------
+With ``J`` the Jacobian at the optimum, ``n`` residuals and ``q`` free parameters, the
+covariance is ``C = s^2 (J^T J)^-1`` with ``s^2 = S / (n - q)``; the 95% interval of
+``theta_i`` is ``theta_i -/+ t_{0.975, n-q} sqrt(C_ii)``; the correlation matrix is
+``C_ij / sqrt(C_ii C_jj)``. These are the usual linearized (asymptotic) intervals; they
+assume white measurement errors and a model that can describe the data.
+
+Fit
+---
+``NRMSE = ||ym - y|| / ||ym - mean(ym)||`` per experiment and signal (0 is a perfect fit;
+MATLAB's ``goodnessOfFit`` 'NRMSE' cost; the System Identification Toolbox's fit percent
+is ``100 (1 - NRMSE)``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+import mechatron as mt
+from mechatron.compiler.compiled import CompiledModel
+from mechatron.errors import DataError, ParameterError
+from mechatron.estimation.data import unit_factor
+from mechatron.estimation.native import compiler
+from mechatron.estimation.discretize import (Trajectory, check_model, choose_substeps,
+                                             fastest_time_constant)
+
+__all__ = ["FreeParameter", "EstimationProblem", "EstimationResult", "estimate"]
+
+#: Substeps per simulation from which ``jit="auto"`` compiles the step functions.
+JIT_STEPS = 4000
+
+
+@dataclass
+class FreeParameter:
+    """A parameter to estimate: model path, starting value, bounds and scale (SI)."""
+
+    name: str
+    initial: float | None = None
+    min: float = -math.inf
+    max: float = math.inf
+    scale: float | None = None
+
+
+def _as_free(spec) -> FreeParameter:
+    if isinstance(spec, FreeParameter):
+        return spec
+    if isinstance(spec, str):
+        return FreeParameter(spec)
+    if isinstance(spec, dict):
+        return FreeParameter(**spec)
+    raise TypeError(f"a free parameter is a name, a dict or a FreeParameter, got {spec!r}")
+
+
+def compiled(model) -> CompiledModel:
+    return model if isinstance(model, CompiledModel) else mt.compile_model(model)
+
+
+class EstimationProblem:
+    """Model, experiments, what is free, and how the data bind to the model.
+
+    Parameters
+    ----------
+    model : Component or CompiledModel
+        A smooth ODE model (no event relations; see :mod:`.discretize`).
+    experiments : list of Experiment
+    free : list of str, dict or FreeParameter
+        Parameters to estimate (paths as in ``CompiledModel.param_names``).
+    inputs : dict label -> parameter path
+        Which model parameter each measured input drives.
+    outputs : dict label -> variable path
+        Which logged model variable each measured output is compared with;
+        ``"rate(path)"`` compares the variable's increment over each sample interval
+        divided by the interval (a speed computed from encoder counts: constant encoder
+        offsets cancel, quantization errors stay bounded).
+    fixed : dict path -> value
+        Parameter values for every experiment (an experiment's ``params`` override them).
+    offsets : list of labels
+        Outputs that get an estimated constant sensor offset (shared by the experiments).
+    free_x0 : list of state names
+        Initial states estimated per experiment.
+    substeps : int or None
+        Radau substeps per sample; ``None`` chooses them from the fastest time constant at
+        the starting values (at most ``max_substeps``).
+    jit : bool or "auto"
+        Compile the step functions to native code (see :mod:`.native`).
+    """
+
+    def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
+                 offsets=(), free_x0=(), substeps=None, max_substeps: int = 400,
+                 step_ratio: float = 4.0, jit="auto"):
+        self.cm = compiled(model)
+        check_model(self.cm, "estimation")
+        cm = self.cm
+        self.experiments = list(experiments)
+        if not self.experiments:
+            raise DataError("no experiment given; an estimation needs measured data.")
+        self.free = [_as_free(f) for f in free]
+        self.inputs = dict(inputs or {})
+        self.outputs = dict(outputs or {})
+        self.fixed = dict(fixed or {})
+        self.offsets = list(offsets)
+        self.free_x0 = list(free_x0)
+        self.jit = jit
+        self._init = dict(inputs=self.inputs, outputs=self.outputs, fixed=self.fixed,
+                          offsets=self.offsets, free_x0=self.free_x0,
+                          max_substeps=max_substeps, step_ratio=step_ratio, jit=jit)
+        pindex = {n: i for i, n in enumerate(cm.param_names)}
+        problems = []
+        for f in self.free:
+            if f.name not in pindex:
+                problems.append(f"free parameter '{f.name}' is not a parameter of model "
+                                f"'{cm.name}' (parameters: {', '.join(cm.param_names)}).")
+        for lab, path in self.inputs.items():
+            if path not in pindex:
+                problems.append(f"input '{lab}' drives '{path}', which is not a parameter "
+                                f"of model '{cm.name}'.")
+        self._outspec = {lab: _parse_output(spec) for lab, spec in self.outputs.items()}
+        for lab, (path, _kind) in self._outspec.items():
+            if path not in cm.names:
+                problems.append(f"output '{lab}' is compared with '{path}', which the "
+                                f"model '{cm.name}' does not log.")
+        for s in self.free_x0:
+            if s not in cm.state_names:
+                problems.append(f"free initial state '{s}' is not a state of '{cm.name}' "
+                                f"(states: {', '.join(cm.state_names)}).")
+        for lab in self.offsets:
+            if lab not in self.outputs:
+                problems.append(f"offset for '{lab}', which is not a measured output.")
+        if problems:
+            raise ParameterError(" ".join(problems), problems=problems, path=cm.name)
+        self.base = cm.parameter_vector(self.fixed)
+        for f in self.free:
+            i = pindex[f.name]
+            if f.initial is None:
+                f.initial = float(self.base[i])
+            lo, hi = cm.param_bounds[i] if cm.param_bounds else (None, None)
+            if lo is not None and f.min < lo:
+                f.min = lo
+            if hi is not None and f.max > hi:
+                f.max = hi
+            if not (f.min <= f.initial <= f.max):
+                raise ParameterError(f"free parameter '{f.name}': starting value "
+                                     f"{f.initial:g} is outside [{f.min:g}, {f.max:g}].",
+                                     path=f.name)
+            if f.scale is None:
+                f.scale = abs(f.initial) or 1.0
+        # the decision vector: parameters, offsets, per-experiment initial states
+        self.names = [f.name for f in self.free] + [f"offset:{lab}" for lab in self.offsets]
+        self.names += [f"{e.name}:{s}" for e in self.experiments for s in self.free_x0]
+        self._bind(substeps, max_substeps, step_ratio)
+
+    # ------------------------------------------------------------------------------------
+    def _bind(self, substeps, max_substeps, step_ratio) -> None:
+        """Check every experiment against the model and build its trajectory function."""
+        cm = self.cm
+        pindex = {n: i for i, n in enumerate(cm.param_names)}
+        self.bound = []
+        problems = []
+        for e in self.experiments:
+            missing = [lab for lab in self.inputs if lab not in e.inputs]
+            if not any(lab in e.outputs for lab in self.outputs):
+                missing += list(self.outputs)
+            if missing:
+                problems.append(f"{e.source}: experiment '{e.name}' lacks signal(s) "
+                                f"{', '.join(missing)} (it has "
+                                f"{', '.join([*e.inputs, *e.outputs])}).")
+                continue
+            in_labels = list(self.inputs)
+            out_labels = [lab for lab in self.outputs if lab in e.outputs]
+            try:
+                fin = [unit_factor(e.units.get(lab, ""),
+                                   cm.param_units[pindex[self.inputs[lab]]],
+                                   e.where(lab)) for lab in in_labels]
+                fout = [unit_factor(e.units.get(lab, ""), self._output_unit(lab),
+                                    e.where(lab)) for lab in out_labels]
+            except DataError as exc:
+                problems.append(str(exc))
+                continue
+            U = np.array([e.inputs[lab] * f for lab, f in zip(in_labels, fin)]).reshape(
+                len(in_labels), e.n)
+            Ym = np.array([e.outputs[lab] * f for lab, f in zip(out_labels, fout)])
+            sig = []
+            for lab, f, y in zip(out_labels, fout, Ym):
+                s = e.sigma.get(lab)
+                s = s * f if s else float(np.ptp(y)) or 1.0
+                sig.append(s)
+            pe = self.base.copy()
+            for key, val in e.params.items():
+                if key not in pindex:
+                    problems.append(f"{e.source}: experiment '{e.name}' sets '{key}', "
+                                    f"which is not a parameter of '{cm.name}'.")
+                    continue
+                pe[pindex[key]] = val
+            x0 = np.array(cm.x_start, dtype=float)[:cm.nx].copy()
+            for key, val in e.x0.items():
+                if key not in cm.state_names:
+                    problems.append(f"{e.source}: experiment '{e.name}' gives initial "
+                                    f"state '{key}', not a state of '{cm.name}'.")
+                    continue
+                x0[cm.state_names.index(key)] = val
+            m = substeps[len(self.bound)] if isinstance(substeps, (list, tuple)) \
+                else substeps
+            if m is None:
+                try:
+                    m = self._substeps(e, pe, x0, U, in_labels, self._start_values(),
+                                       step_ratio, max_substeps)
+                except DataError as exc:
+                    problems.append(str(exc))
+                    continue
+            traj = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
+                              [cm.names.index(self._outspec[lab][0]) for lab in out_labels],
+                              substeps=m, hold=e.hold, jit=self._use_jit(e.n * m))
+            self.bound.append(dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), p=pe, x0=x0,
+                                   traj=traj, out_labels=out_labels, substeps=m))
+        if problems:
+            raise DataError(" ".join(problems), problems=problems)
+        self._build_residual()
+
+    def _use_jit(self, steps: int) -> bool:
+        """Native code for long experiments (``jit="auto"``: at least JIT_STEPS substeps
+        per simulation, and a C compiler present)."""
+        if self.jit == "auto":
+            return steps >= JIT_STEPS and compiler() is not None
+        return bool(self.jit)
+
+    def _output_unit(self, lab: str) -> str:
+        path, kind = self._outspec[lab]
+        unit = self.cm.units[self.cm.names.index(path)]
+        return f"({unit})/s" if kind == "rate" else unit
+
+    def use_native(self) -> bool:
+        """Compile every experiment's step functions to native code (for many
+        simulations, e.g. a sensitivity analysis); False if no C compiler is present."""
+        if compiler() is None:
+            return False
+        for b in self.bound:
+            tr = b["traj"]
+            if not tr.jit:
+                b["traj"] = Trajectory(self.cm, tr.t, tr.input_index, tr.output_index,
+                                       substeps=tr.substeps, hold=tr.hold, jit=True)
+        self._init["jit"] = True
+        return True
+
+    def __reduce__(self):
+        """Pickle as the constructor's arguments (the CasADi functions are rebuilt, with
+        the same substeps): for process pools and Dask workers."""
+        import copy
+        return (_rebuild, (self.cm, self.experiments, copy.deepcopy(self.free),
+                           dict(self._init, substeps=[b["substeps"] for b in self.bound])))
+
+    def _start_values(self) -> dict:
+        return {f.name: f.initial for f in self.free}
+
+    def _substeps(self, e, pe, x0, U, in_labels, values, ratio, max_substeps) -> int:
+        """Substeps for experiment ``e`` from the fastest time constant with the free
+        parameters at ``values`` and the inputs at their largest magnitude."""
+        cm = self.cm
+        pindex = {n: i for i, n in enumerate(cm.param_names)}
+        p = pe.copy()
+        for name, v in values.items():
+            p[pindex[name]] = v
+        for j, lab in enumerate(in_labels):
+            p[pindex[self.inputs[lab]]] = U[j][np.argmax(np.abs(U[j]))] if U[j].size else 0
+        # states along a coarse (one substep, L-stable) simulation at these values
+        probe = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels], [],
+                           substeps=1, hold=e.hold)
+        pp = pe.copy()
+        for name, v in values.items():
+            pp[pindex[name]] = v
+        _, X = probe(pp, x0, U)
+        X = X[:, np.linspace(0, X.shape[1] - 1, min(X.shape[1], 60)).astype(int)]
+        tau = fastest_time_constant(cm, p, X)
+        return choose_substeps(float(np.diff(e.t).max()), tau, ratio=ratio,
+                               max_substeps=max_substeps, where=e.where("t"))
+
+    def refine(self, theta, ratio: float = 1.0, max_substeps: int = 400) -> bool:
+        """Re-choose the substeps for the parameters ``theta``; rebuild and return True
+        if any experiment needs more than it has (for accuracy at the solution)."""
+        values = dict(zip([f.name for f in self.free], theta[:len(self.free)]))
+        changed = False
+        for b in self.bound:
+            m = self._substeps(b["exp"], b["p"], b["x0"], b["U"], list(self.inputs),
+                               values, ratio, max_substeps)
+            if m > b["substeps"]:
+                tr = b["traj"]
+                b["traj"] = Trajectory(self.cm, tr.t, tr.input_index, tr.output_index,
+                                       substeps=m, hold=tr.hold,
+                                       jit=self._use_jit(tr.t.size * m))
+                b["substeps"] = m
+                changed = True
+        if changed:
+            self._build_residual()
+        return changed
+
+    def _build_residual(self) -> None:
+        """Direction matrices of every experiment: ``D`` maps the decision vector to the
+        parameter vector, ``S0`` to the initial state."""
+        cm = self.cm
+        pindex = {n: i for i, n in enumerate(cm.param_names)}
+        nq = len(self.names)
+        nf, no = len(self.free), len(self.offsets)
+        k0 = nf + no
+        for b in self.bound:
+            D = np.zeros((cm.p0.size, nq))
+            for j, f in enumerate(self.free):
+                D[pindex[f.name], j] = 1.0
+            S0 = np.zeros((cm.nx, nq))
+            cols = []
+            for s in self.free_x0:
+                S0[cm.state_names.index(s), k0] = 1.0
+                cols.append(k0)
+                k0 += 1
+            b["D"], b["S0"], b["x0_cols"] = D, S0, cols
+        self.n_residuals = sum(
+            sum(b["exp"].n - (self._outspec[lab][1] == "rate") for lab in b["out_labels"])
+            for b in self.bound)
+
+    def _point(self, b, theta):
+        cm = self.cm
+        p = b["p"].copy()
+        nf = len(self.free)
+        p[b["D"][:, :nf].argmax(axis=0)] = theta[:nf] if nf else p[[]]
+        x0 = b["x0"].copy()
+        for s, c in zip(self.free_x0, b["x0_cols"]):
+            x0[cm.state_names.index(s)] = theta[c]
+        return p, x0
+
+    def _assemble(self, b, theta, Y, dY=None):
+        """Weighted residuals (and their Jacobian) of one experiment from its outputs."""
+        nf = len(self.free)
+        nq = len(self.names)
+        n_out = len(b["out_labels"])
+        r_parts, j_parts = [], []
+        dt = np.diff(b["exp"].t)
+        for r, lab in enumerate(b["out_labels"]):
+            y = Y[r]
+            ym = b["Ym"][r]
+            dy = dY[r::n_out, :].T if dY is not None else None      # (N, nq)
+            if self._outspec[lab][1] == "rate":
+                y = np.diff(y) / dt
+                ym = ym[1:]
+                if dy is not None:
+                    dy = np.diff(dy, axis=0) / dt[:, None]
+            if lab in self.offsets:
+                k = nf + self.offsets.index(lab)
+                y = y + theta[k]
+                if dy is not None:
+                    dy = dy.copy()
+                    dy[:, k] += 1.0
+            sig = b["sigma"][r]
+            r_parts.append((y - ym) / sig)
+            if dy is not None:
+                j_parts.append(dy / sig)
+        r = np.concatenate(r_parts) if r_parts else np.zeros(0)
+        J = np.vstack(j_parts) if j_parts else np.zeros((0, nq))
+        return r, J
+
+    def residuals(self, theta) -> np.ndarray:
+        """Weighted residuals at (unscaled) ``theta``."""
+        theta = np.asarray(theta, dtype=float)
+        out = []
+        for b in self.bound:
+            p, x0 = self._point(b, theta)
+            Y, _ = b["traj"](p, x0, b["U"])
+            out.append(self._assemble(b, theta, Y)[0])
+        return np.concatenate(out)
+
+    def jacobian(self, theta):
+        """``(r, dr/dtheta)`` at (unscaled) ``theta``: exact forward sensitivities."""
+        theta = np.asarray(theta, dtype=float)
+        rs, js = [], []
+        for b in self.bound:
+            p, x0 = self._point(b, theta)
+            f = b["traj"].sensitivity_function(b["D"])
+            Y, dY = f(p, x0, b["U"], b["S0"])
+            r, J = self._assemble(b, theta, Y.full(), dY.full())
+            rs.append(r)
+            js.append(J)
+        return np.concatenate(rs), np.vstack(js)
+
+    # ------------------------------------------------------------------------------------
+    @property
+    def initial(self) -> np.ndarray:
+        vals = [f.initial for f in self.free] + [0.0] * len(self.offsets)
+        for b in self.bound:
+            for s in self.free_x0:
+                vals.append(b["x0"][self.cm.state_names.index(s)])
+        return np.array(vals, dtype=float)
+
+    @property
+    def scales(self) -> list:
+        out = [f.scale for f in self.free]
+        for lab in self.offsets:
+            b = next(b for b in self.bound if lab in b["out_labels"]) if getattr(
+                self, "bound", None) else None
+            out.append(float(b["sigma"][b["out_labels"].index(lab)]) if b else 1.0)
+        out += [1.0] * (len(self.names) - len(out))
+        return out
+
+    @property
+    def bounds(self):
+        lo = [f.min for f in self.free] + [-math.inf] * (len(self.names) - len(self.free))
+        hi = [f.max for f in self.free] + [math.inf] * (len(self.names) - len(self.free))
+        return np.array(lo), np.array(hi)
+
+    def simulate(self, theta=None) -> list[dict]:
+        """Model outputs of every experiment at ``theta`` (default: the starting values):
+        ``[{label: array}]`` in the model's units, offsets included."""
+        theta = self.initial if theta is None else np.asarray(theta, dtype=float)
+        nf = len(self.free)
+        out = []
+        for b in self.bound:
+            p, x0 = self._point(b, theta)
+            Y, _ = b["traj"](p, x0, b["U"])
+            sims = {}
+            for r, lab in enumerate(b["out_labels"]):
+                y = Y[r]
+                if self._outspec[lab][1] == "rate":
+                    y = np.concatenate([[b["Ym"][r][0]], np.diff(y) / np.diff(b["exp"].t)])
+                if lab in self.offsets:
+                    y = y + theta[nf + self.offsets.index(lab)]
+                sims[lab] = y
+            out.append(sims)
+        return out
+
+
+@dataclass
+class EstimationResult:
+    """Outcome of :func:`estimate` (see the module docstring for the statistics)."""
+
+    names: list
+    initial: np.ndarray
+    values: np.ndarray
+    std: np.ndarray
+    ci95: dict
+    correlation: np.ndarray
+    cost_initial: float
+    cost: float
+    nrmse: dict
+    nrmse_initial: dict
+    history: list
+    iterations: int
+    evaluations: int
+    wall_time: float
+    success: bool
+    message: str
+    problem: EstimationProblem = field(repr=False, default=None)
+
+    @property
+    def parameters(self) -> dict:
+        return dict(zip(self.names, map(float, self.values)))
+
+    def to_dict(self) -> dict:
+        return {"parameters": self.parameters,
+                "initial": dict(zip(self.names, map(float, self.initial))),
+                "ci95": {k: [float(lo), float(hi)] for k, (lo, hi) in self.ci95.items()},
+                "std": dict(zip(self.names, map(float, self.std))),
+                "correlation": {"names": self.names,
+                                "matrix": np.round(self.correlation, 6).tolist()},
+                "cost_initial": self.cost_initial, "cost": self.cost,
+                "nrmse": self.nrmse, "nrmse_initial": self.nrmse_initial,
+                "iterations": self.iterations, "evaluations": self.evaluations,
+                "wall_time_s": self.wall_time, "success": self.success,
+                "message": self.message,
+                "trajectory": [{"iteration": h["iteration"], "cost": h["cost"],
+                                "parameters": dict(zip(self.names, h["theta"]))}
+                               for h in self.history]}
+
+    # -- plots -------------------------------------------------------------------------------
+    def plot_fit(self, path) -> Path:
+        """Measured data, model before and after, per experiment and signal."""
+        from matplotlib.figure import Figure
+        prob = self.problem
+        before = prob.simulate(self.initial)
+        after = prob.simulate(self.values)
+        rows = sum(len(b["out_labels"]) for b in prob.bound)
+        fig = Figure(figsize=(8, 2.2 * rows + 0.6), layout="constrained")
+        axes = fig.subplots(rows, 1, squeeze=False)
+        r = 0
+        for b, y0, y1 in zip(prob.bound, before, after):
+            e = b["exp"]
+            for k, lab in enumerate(b["out_labels"]):
+                ax = axes[r, 0]
+                ax.plot(e.t, b["Ym"][k], ".", ms=2, color="0.6", label="measured")
+                ax.plot(e.t, y0[lab], "--", color="tab:red", label="before")
+                ax.plot(e.t, y1[lab], "-", color="tab:blue", label="after")
+                ax.set_ylabel(f"{e.name}\n{lab}")
+                ax.grid(True, alpha=0.3)
+                r += 1
+        axes[0, 0].legend(loc="best", fontsize="small")
+        axes[-1, 0].set_xlabel("t [s]")
+        fig.suptitle("parameter estimation: measured vs model before/after")
+        path = Path(path)
+        fig.savefig(path, dpi=90)
+        return path
+
+    def plot_trajectory(self, path) -> Path:
+        """Each free parameter relative to its final value, per iteration."""
+        from matplotlib.figure import Figure
+        th = np.array([h["theta"] for h in self.history])
+        fig = Figure(figsize=(7, 6), layout="constrained")
+        axes = fig.subplots(2, 1)
+        for j, name in enumerate(self.names):
+            ref = self.values[j] if self.values[j] else 1.0
+            axes[0].plot(th[:, j] / ref, marker="o", ms=3, label=name)
+        axes[0].set_ylabel("value / final value")
+        axes[0].legend(fontsize="small", ncol=2)
+        axes[0].grid(True, alpha=0.3)
+        axes[1].semilogy([h["cost"] for h in self.history], marker="o", ms=3)
+        axes[1].set_ylabel("cost S")
+        axes[1].set_xlabel("iteration")
+        axes[1].grid(True, alpha=0.3)
+        path = Path(path)
+        fig.savefig(path, dpi=90)
+        return path
+
+
+def _rebuild(cm, experiments, free, kwargs):
+    return EstimationProblem(cm, experiments, free, **kwargs)
+
+
+def _parse_output(spec: str) -> tuple[str, str]:
+    """``"path"`` -> (path, "value"); ``"rate(path)"`` -> (path, "rate"): the increment of
+    the variable over the previous sample interval divided by its length (what a drive
+    computes from encoder counts), compared from the second sample on."""
+    spec = str(spec).strip()
+    if spec.startswith("rate(") and spec.endswith(")"):
+        return spec[5:-1].strip(), "rate"
+    return spec, "value"
+
+
+def _nrmse(prob: EstimationProblem, sims: list[dict]) -> dict:
+    out = {}
+    for b, s in zip(prob.bound, sims):
+        d = {}
+        for k, lab in enumerate(b["out_labels"]):
+            ym = b["Ym"][k]
+            den = np.linalg.norm(ym - ym.mean()) or 1.0
+            d[lab] = float(np.linalg.norm(ym - s[lab]) / den)
+        out[b["exp"].name] = d
+    return out
+
+
+def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: float = 1e-8,
+             ftol: float = 1e-10, gtol: float = 1e-10, callback=None, refine: bool = True,
+             fine_ratio: float = 1.0, max_step: float = 0.5,
+             log_space: bool = False) -> EstimationResult:
+    """Solve ``problem`` (see the module docstring); ``callback(iteration, theta, cost)``
+    is called after each Jacobian evaluation (one per iteration) for progress display."""
+    from scipy.special import stdtrit
+
+    prob = problem
+    scales = np.array(prob.scales)
+    lo_t, hi_t = prob.bounds
+    theta0 = np.clip(prob.initial, lo_t, hi_t)
+    # with log_space, positive parameters (lower bound >= 0, positive start) move in log
+    # space: a step is a factor and they cannot reach 0 (but they may creep towards it)
+    logv = np.zeros(theta0.size, dtype=bool)
+    if log_space:
+        logv[:len(prob.free)] = (lo_t[:len(prob.free)] >= 0) & (theta0[:len(prob.free)] > 0)
+
+    def to_theta(x):
+        return np.where(logv, scales * np.exp(np.where(logv, x, 0.0)), x * scales)
+
+    def to_x(theta):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(logv, np.log(np.where(logv, theta, 1.0) / scales),
+                            theta / scales)
+
+    hi = to_x(hi_t)
+    with np.errstate(divide="ignore"):
+        lo = np.where(logv, np.log(np.maximum(lo_t, 0.0) / scales), lo_t / scales)
+    history = []
+    counts = {"sims": 0}
+    start = time.perf_counter()
+
+    def point(x):
+        counts["sims"] += 1
+        theta = to_theta(x)
+        r, j = prob.jacobian(theta)
+        return r, j * np.where(logv, theta, scales)
+
+    x = to_x(theta0)
+    r, J = point(x)
+    cost0 = cost = float(r @ r)
+    message, success = "maximum number of iterations reached", False
+
+    def record(x, cost):
+        history.append({"iteration": len(history), "theta": to_theta(x).tolist(),
+                        "cost": cost})
+        if callback is not None:
+            callback(len(history) - 1, to_theta(x), cost)
+
+    record(x, cost)
+    for _round in range(3):
+        lam = None
+        for _it in range(max_iterations):
+            g = J.T @ r
+            A = J.T @ J
+            free_dir = ~(((x <= lo) & (g > 0)) | ((x >= hi) & (g < 0)))
+            if np.max(np.abs(g[free_dir]), initial=0.0) <= gtol * max(cost, 1e-300):
+                message, success = "gradient below gtol", True
+                break
+            d = np.maximum(np.diag(A), 1e-12 * max(np.diag(A).max(), 1e-300))
+            if lam is None:
+                lam = 1e-3
+            accepted = False
+            while lam < 1e16:
+                try:
+                    dx = np.linalg.solve(A + lam * np.diag(d), -g)
+                except np.linalg.LinAlgError:
+                    dx = -np.linalg.pinv(A + lam * np.diag(d)) @ g
+                big = np.max(np.abs(dx))
+                if big > max_step:                 # at most a factor e per iteration
+                    dx = dx * (max_step / big)
+                xn = np.clip(x + dx, lo, hi)
+                step = xn - x
+                pred = -(2 * g @ step + step @ A @ step)
+                rn, Jn = point(xn)
+                cn = float(rn @ rn)
+                if np.isfinite(cn) and cn < cost and pred > 0:
+                    rho = (cost - cn) / pred
+                    lam *= max(1 / 3, 1 - (2 * rho - 1) ** 3)
+                    accepted = True
+                    break
+                lam *= 4.0
+            if not accepted:
+                message, success = "no decrease along any step length", True
+                break
+            small_step = np.linalg.norm(step) <= xtol * (np.linalg.norm(x) + xtol)
+            small_gain = cost - cn <= ftol * cost
+            x, r, J, cost = xn, rn, Jn, cn
+            record(x, cost)
+            if small_step or small_gain:
+                message = "relative step below xtol" if small_step else \
+                    "relative decrease below ftol"
+                success = True
+                break
+        # the substeps were chosen at the starting values, coarse (L-stable steps); make
+        # them fine enough at the solution, and polish the solution with them
+        if not refine or not prob.refine(to_theta(x), fine_ratio):
+            break
+        r, J = point(x)
+        cost = float(r @ r)
+    theta = to_theta(x)
+    J = J / np.where(logv, theta, scales)
+    n, q = r.size, theta.size
+    dof = max(n - q, 1)
+    s2 = cost / dof
+    JtJ = J.T @ J
+    try:
+        cov = s2 * np.linalg.inv(JtJ)
+    except np.linalg.LinAlgError:
+        cov = s2 * np.linalg.pinv(JtJ)
+    std = np.sqrt(np.clip(np.diag(cov), 0, None))
+    tq = float(stdtrit(dof, 0.975))
+    ci = {name: (float(v - tq * s), float(v + tq * s))
+          for name, v, s in zip(prob.names, theta, std)}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(std, std)
+    wall = time.perf_counter() - start
+    return EstimationResult(
+        names=list(prob.names), initial=prob.initial, values=theta, std=std, ci95=ci,
+        correlation=corr, cost_initial=cost0, cost=cost,
+        nrmse=_nrmse(prob, prob.simulate(theta)),
+        nrmse_initial=_nrmse(prob, prob.simulate(prob.initial)), history=history,
+        iterations=len(history) - 1, evaluations=counts["sims"], wall_time=wall,
+        success=bool(success), message=message, problem=prob)

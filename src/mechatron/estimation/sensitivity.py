@@ -1,0 +1,413 @@
+"""Monte Carlo sensitivity analysis (the seed's section 6.2, Simulink's Sensitivity
+Analyzer).
+
+1. **Distributions** per parameter: ``uniform(low, high)``, ``normal(mean, std)``,
+   ``loguniform(low, high)`` (uniform in ``log p``).
+2. **Sampling** of ``N`` points: ``"random"``, ``"lhs"`` (Latin hypercube) or ``"sobol"``
+   (scrambled Sobol sequence in Saltelli's scheme: two base matrices ``A``, ``B`` and the
+   ``d`` matrices ``A_B^i`` (``A`` with column ``i`` from ``B``), ``N (d + 2)`` model runs,
+   from which Sobol indices follow).
+3. **Requirements** evaluated per sample: by default the sum of squared errors of each
+   measured signal against the model (unweighted, in the signal's units, as in Simulink
+   Design Optimization) and the weighted total cost of the estimation problem.
+4. **Evaluation** in parallel: a local process pool (default), or a Dask cluster when its
+   address is given (Dask is imported only then).
+5. **Statistics** per parameter and requirement: Pearson and Spearman correlation,
+   standardized regression coefficients (least squares on standardized values; their
+   squares add up to the variance explained by a linear model, ``R^2``), and with Sobol
+   sampling the first-order and total Sobol indices (Saltelli 2010 for ``S1``, Jansen 1999
+   for ``ST``). The **ranking** orders the parameters by the total index when there is one
+   (it sees non-monotonic effects, e.g. an error that is smallest in the middle of the
+   range), else by ``|SRC|``; the largest value over the requirements counts.
+6. **Best samples**: the parameter sets with the lowest total cost, as starting values of
+   the estimation (the seed's table 6-2).
+
+References: A. Saltelli et al., "Variance based sensitivity analysis of model output",
+Comput. Phys. Commun. 181 (2010) 259-270; M. J. W. Jansen, Comput. Phys. Commun. 117
+(1999) 35-43.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mechatron.errors import ParameterError
+from mechatron.estimation.native import compiler
+
+__all__ = ["Distribution", "sample", "SensitivityResult", "run_sensitivity",
+           "local_sensitivity", "sobol_indices", "standardized_regression"]
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """``kind`` is "uniform" (a = low, b = high), "normal" (a = mean, b = std) or
+    "loguniform" (a = low > 0, b = high)."""
+
+    kind: str
+    a: float
+    b: float
+
+    def __post_init__(self):
+        if self.kind not in ("uniform", "normal", "loguniform"):
+            raise ParameterError(f"distribution '{self.kind}': use uniform, normal or "
+                                 "loguniform.")
+        if self.kind in ("uniform", "loguniform") and not self.a < self.b:
+            raise ParameterError(f"{self.kind}({self.a:g}, {self.b:g}): low must be below "
+                                 "high.")
+        if self.kind == "loguniform" and self.a <= 0:
+            raise ParameterError(f"loguniform({self.a:g}, {self.b:g}): low must be > 0.")
+        if self.kind == "normal" and self.b <= 0:
+            raise ParameterError(f"normal({self.a:g}, {self.b:g}): std must be > 0.")
+
+    def ppf(self, u: np.ndarray) -> np.ndarray:
+        """Values at cumulative probabilities ``u`` in (0, 1)."""
+        u = np.asarray(u, dtype=float)
+        if self.kind == "uniform":
+            return self.a + (self.b - self.a) * u
+        if self.kind == "loguniform":
+            return np.exp(np.log(self.a) + (np.log(self.b) - np.log(self.a)) * u)
+        from scipy.special import ndtri
+        return self.a + self.b * ndtri(np.clip(u, 1e-12, 1 - 1e-12))
+
+
+def sample(dists: dict, n: int, method: str = "lhs", seed: int = 0):
+    """``n`` points of the joint distribution (independent parameters).
+
+    Returns ``X`` of shape ``(n, d)``; for ``"sobol"`` returns the Saltelli design
+    ``(A, B, AB)`` with ``AB`` of shape ``(d, n, d)``."""
+    d = len(dists)
+    names = list(dists)
+    rng = np.random.default_rng(seed)
+    if method == "random":
+        U = rng.random((n, d))
+    elif method == "lhs":
+        from scipy.stats import qmc
+        U = qmc.LatinHypercube(d=d, seed=rng).random(n)
+    elif method == "sobol":
+        from scipy.stats import qmc
+        m = int(math.ceil(math.log2(max(n, 2))))
+        UU = qmc.Sobol(d=2 * d, scramble=True, seed=rng).random_base2(m)[:n]
+        A = _map(dists, names, UU[:, :d])
+        Bm = _map(dists, names, UU[:, d:])
+        AB = np.repeat(A[None, :, :], d, axis=0)
+        for i in range(d):
+            AB[i, :, i] = Bm[:, i]
+        return A, Bm, AB
+    else:
+        raise ParameterError(f"sampling '{method}': use random, lhs or sobol.")
+    return _map(dists, names, U)
+
+
+def _map(dists, names, U):
+    return np.column_stack([dists[nm].ppf(U[:, j]) for j, nm in enumerate(names)])
+
+
+# ------------------------------------------------------------------------------ statistics
+def standardized_regression(X: np.ndarray, y: np.ndarray):
+    """``(SRC, R^2)``: coefficients of ``(y - mean)/std`` regressed on the standardized
+    columns of ``X``."""
+    Xs = (X - X.mean(0)) / X.std(0)
+    ys = (y - y.mean()) / (y.std() or 1.0)
+    A = np.column_stack([Xs, np.ones(len(y))])
+    coef, *_ = np.linalg.lstsq(A, ys, rcond=None)
+    pred = A @ coef
+    r2 = 1 - np.sum((ys - pred) ** 2) / max(np.sum((ys - ys.mean()) ** 2), 1e-300)
+    return coef[:-1], float(r2)
+
+
+def sobol_indices(fA: np.ndarray, fB: np.ndarray, fAB: np.ndarray):
+    """First-order and total Sobol indices from the Saltelli design outputs.
+
+    ``S1_i = mean(fB (fAB_i - fA)) / V``,  ``ST_i = mean((fA - fAB_i)^2) / (2 V)`` with
+    ``V`` the variance of ``[fA, fB]``."""
+    V = np.var(np.concatenate([fA, fB]))
+    if V <= 0:
+        return np.zeros(len(fAB)), np.zeros(len(fAB))
+    S1 = np.array([np.mean(fB * (fi - fA)) / V for fi in fAB])
+    ST = np.array([0.5 * np.mean((fA - fi) ** 2) / V for fi in fAB])
+    return S1, ST
+
+
+def _rank(x):
+    order = np.argsort(x, kind="stable")
+    r = np.empty(len(x))
+    r[order] = np.arange(len(x))
+    return r
+
+
+@dataclass
+class SensitivityResult:
+    """Samples, requirement values, statistics, ranking and best samples."""
+
+    names: list
+    requirements: list
+    X: np.ndarray
+    Y: np.ndarray                      # (n, n_req)
+    method: str
+    pearson: np.ndarray                # (d, n_req)
+    spearman: np.ndarray
+    src: np.ndarray
+    r2: np.ndarray                     # (n_req,)
+    S1: np.ndarray | None
+    ST: np.ndarray | None
+    ranking: list
+    best: list                         # [{name: value}] by increasing cost
+    evaluations: int
+    wall_time: float
+    workers: int
+    failed: int = 0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def throughput(self) -> float:
+        """Simulations per second (wall clock)."""
+        return self.evaluations / self.wall_time if self.wall_time else math.nan
+
+    def to_dict(self) -> dict:
+        def table(m):
+            return None if m is None else {
+                n: dict(zip(self.requirements, map(float, row)))
+                for n, row in zip(self.names, m)}
+        return {"parameters": self.names, "requirements": self.requirements,
+                "method": self.method, "samples": int(self.X.shape[0]),
+                "evaluations": self.evaluations, "failed": self.failed,
+                "wall_time_s": self.wall_time, "simulations_per_s": self.throughput,
+                "workers": self.workers, "pearson": table(self.pearson),
+                "spearman": table(self.spearman), "src": table(self.src),
+                "r2": dict(zip(self.requirements, map(float, self.r2))),
+                "sobol_first": table(self.S1), "sobol_total": table(self.ST),
+                "ranking": self.ranking, "best": self.best}
+
+    def plot_scatter(self, path) -> Path:
+        """Scatter matrix: each requirement (rows) against each parameter (columns)."""
+        from matplotlib.figure import Figure
+        d, r = len(self.names), len(self.requirements)
+        fig = Figure(figsize=(2.0 * d + 1, 1.8 * r + 0.8), layout="constrained")
+        axes = fig.subplots(r, d, squeeze=False)
+        for a in range(r):
+            for b in range(d):
+                ax = axes[a, b]
+                ax.plot(self.X[:, b], self.Y[:, a], ".", ms=2, alpha=0.5)
+                ax.tick_params(labelsize=6)
+                if a == r - 1:
+                    ax.set_xlabel(self.names[b], fontsize=8)
+                if b == 0:
+                    ax.set_ylabel(self.requirements[a], fontsize=8)
+        fig.suptitle(f"sensitivity: {self.X.shape[0]} samples ({self.method})")
+        path = Path(path)
+        fig.savefig(path, dpi=80)
+        return path
+
+    def plot_tornado(self, path) -> Path:
+        """Tornado chart of the ranking measure per requirement (largest on top)."""
+        from matplotlib.figure import Figure
+        measure = self.ST if self.ST is not None else self.src
+        label = "total Sobol index" if self.ST is not None else "standardized regression coef."
+        r = len(self.requirements)
+        fig = Figure(figsize=(4.0 * r + 1, 0.35 * len(self.names) + 1.5),
+                     layout="constrained")
+        axes = fig.subplots(1, r, squeeze=False)[0]
+        order = [self.names.index(n) for n in self.ranking][::-1]
+        for a, ax in enumerate(axes):
+            vals = measure[order, a]
+            ax.barh([self.names[i] for i in order], vals,
+                    color=["tab:blue" if v >= 0 else "tab:red" for v in vals])
+            ax.set_title(self.requirements[a], fontsize=9)
+            ax.set_xlabel(label, fontsize=8)
+            ax.grid(True, axis="x", alpha=0.3)
+        path = Path(path)
+        fig.savefig(path, dpi=80)
+        return path
+
+
+# ------------------------------------------------------------------------------ evaluation
+_WORKER = {}
+
+
+def _init_worker(problem) -> None:
+    _WORKER["problem"] = problem
+
+
+def _evaluate_chunk(args):
+    """Requirement values for a block of samples (runs in a worker or in-process)."""
+    thetas, problem = args
+    prob = problem if problem is not None else _WORKER["problem"]
+    return _evaluate(prob, thetas)
+
+
+def requirement_names(problem) -> list:
+    labels = []
+    for b in problem.bound:
+        for lab in b["out_labels"]:
+            if lab not in labels:
+                labels.append(lab)
+    return [f"sse_{lab}" for lab in labels] + ["cost"]
+
+
+def _evaluate(prob, thetas) -> np.ndarray:
+    names = requirement_names(prob)
+    out = np.full((len(thetas), len(names)), np.nan)
+    for k, theta in enumerate(thetas):
+        try:
+            sims = prob.simulate(theta)
+        except Exception:                    # a sample the model cannot run: NaN row
+            continue
+        sse = {}
+        for b, s in zip(prob.bound, sims):
+            for r, lab in enumerate(b["out_labels"]):
+                ym = b["Ym"][r]
+                y = s[lab]
+                sse[lab] = sse.get(lab, 0.0) + float(np.sum((y - ym) ** 2))
+        cost = 0.0
+        for b, s in zip(prob.bound, sims):
+            for r, lab in enumerate(b["out_labels"]):
+                cost += float(np.sum(((s[lab] - b["Ym"][r]) / b["sigma"][r]) ** 2))
+        out[k] = [sse[n[4:]] for n in names[:-1]] + [cost]
+    return out
+
+
+def _theta_rows(problem, names, X) -> np.ndarray:
+    """Full decision vectors: the problem's starting values with ``names`` set from X."""
+    base = problem.initial
+    idx = [problem.names.index(n) for n in names]
+    T = np.repeat(base[None, :], X.shape[0], axis=0)
+    T[:, idx] = X
+    return T
+
+
+def evaluate(problem, names, X, *, workers: int | None = None, address: str | None = None,
+             progress=None) -> np.ndarray:
+    """Requirement values at the rows of ``X`` (parameters ``names``), in parallel."""
+    T = _theta_rows(problem, names, X)
+    n = len(T)
+    workers = workers if workers is not None else (os.cpu_count() or 1)
+    chunks = max(1, min(n, 4 * max(workers, 1)))
+    blocks = np.array_split(np.arange(n), chunks)
+    out = np.full((n, len(requirement_names(problem))), np.nan)
+    done = 0
+    if address:
+        from dask.distributed import Client        # optional dependency
+        with Client(address) as client:
+            remote = client.scatter(problem, broadcast=True)
+            futures = [client.submit(_evaluate, remote, T[blk]) for blk in blocks]
+            for blk, fut in zip(blocks, futures):
+                out[blk] = fut.result()
+                done += len(blk)
+                if progress:
+                    progress(done, n)
+        return out
+    if workers <= 1 or n < 8:
+        for blk in blocks:
+            out[blk] = _evaluate(problem, T[blk])
+            done += len(blk)
+            if progress:
+                progress(done, n)
+        return out
+    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
+                             initargs=(problem,)) as pool:
+        for blk, res in zip(blocks, pool.map(_evaluate_chunk, [(T[b], None) for b in blocks])):
+            out[blk] = res
+            done += len(blk)
+            if progress:
+                progress(done, n)
+    return out
+
+
+def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol",
+                    seed: int = 0, workers: int | None = None, address: str | None = None,
+                    best: int = 5, progress=None, native: bool = True) -> SensitivityResult:
+    """Sample ``dists`` (parameter name of ``problem`` -> :class:`Distribution`), evaluate
+    the requirements, and compute the statistics (see the module docstring).
+
+    ``native`` compiles the step functions to C first when a compiler is present (see
+    :mod:`.native`; the results are the same)."""
+    names = list(dists)
+    unknown = [nm for nm in names if nm not in problem.names]
+    if unknown:
+        raise ParameterError(f"sensitivity: {', '.join(unknown)} not among the problem's "
+                             f"free parameters ({', '.join(problem.names)}).")
+    start = time.perf_counter()
+    if native and compiler() is not None:
+        problem = copy.copy(problem)          # do not change the caller's problem
+        problem.bound = [dict(b) for b in problem.bound]
+        problem._init = dict(problem._init)
+        problem.use_native()
+    reqs = requirement_names(problem)
+    d = len(names)
+    if method == "sobol":
+        A, Bm, AB = sample(dists, n, "sobol", seed)
+        X = np.vstack([A, Bm, AB.reshape(-1, d)])
+    else:
+        X = sample(dists, n, method, seed)
+    Y = evaluate(problem, names, X, workers=workers, address=address, progress=progress)
+    used_workers = 0 if address else (workers if workers is not None else os.cpu_count())
+    ok = np.all(np.isfinite(Y), axis=1)
+    failed = int(np.sum(~ok))
+    # statistics on the independent samples (A and B for Sobol)
+    base = slice(0, 2 * n) if method == "sobol" else slice(0, len(X))
+    Xs, Ys = X[base][ok[base]], Y[base][ok[base]]
+    pear = np.zeros((d, len(reqs)))
+    spear = np.zeros((d, len(reqs)))
+    src = np.zeros((d, len(reqs)))
+    r2 = np.zeros(len(reqs))
+    for a in range(len(reqs)):
+        y = Ys[:, a]
+        for j in range(d):
+            pear[j, a] = np.corrcoef(Xs[:, j], y)[0, 1]
+            spear[j, a] = np.corrcoef(_rank(Xs[:, j]), _rank(y))[0, 1]
+        src[:, a], r2[a] = standardized_regression(Xs, y)
+    S1 = ST = None
+    if method == "sobol":
+        fA, fB = Y[:n], Y[n:2 * n]
+        fAB = Y[2 * n:].reshape(d, n, len(reqs))
+        keep = np.all(np.isfinite(fA), 1) & np.all(np.isfinite(fB), 1) & \
+            np.all(np.isfinite(fAB), axis=(0, 2))
+        S1 = np.zeros((d, len(reqs)))
+        ST = np.zeros((d, len(reqs)))
+        for a in range(len(reqs)):
+            S1[:, a], ST[:, a] = sobol_indices(fA[keep, a], fB[keep, a], fAB[:, keep, a])
+    measure = ST if ST is not None else np.abs(src)
+    # rank by the requirements on the measured signals (the total cost repeats them)
+    score = np.nanmax(np.abs(measure[:, :-1] if len(reqs) > 1 else measure), axis=1)
+    ranking = [names[j] for j in np.argsort(-score, kind="stable")]
+    # best among the independent samples (for Sobol, the rows of A and B: the A_B rows
+    # repeat all but one of their columns)
+    indep = np.arange(2 * n) if method == "sobol" else np.arange(len(X))
+    order = indep[np.argsort(np.where(ok[indep], Y[indep, -1], np.inf))][:best]
+    best_sets = [dict(zip(names, map(float, X[k]))) | {"cost": float(Y[k, -1])}
+                 for k in order]
+    return SensitivityResult(names=names, requirements=reqs, X=X, Y=Y, method=method,
+                             pearson=pear, spearman=spear, src=src, r2=r2, S1=S1, ST=ST,
+                             ranking=ranking, best=best_sets, evaluations=len(X),
+                             wall_time=time.perf_counter() - start,
+                             workers=int(used_workers or 0), failed=failed)
+
+
+def local_sensitivity(problem, names, *, rel_step: float = 1e-3) -> dict:
+    """Finite-difference local sensitivity at the starting values: for each parameter
+    ``p`` and measured signal ``l``, ``||y_l(p (1+h)) - y_l(p (1-h))|| / (2 h ||y_l||)``
+    (relative change of the signal per relative change of the parameter)."""
+    theta0 = problem.initial
+    base = problem.simulate(theta0)
+    out = {}
+    for name in names:
+        j = problem.names.index(name)
+        hp, hm = theta0.copy(), theta0.copy()
+        hp[j] *= 1 + rel_step
+        hm[j] *= 1 - rel_step
+        sp, sm = problem.simulate(hp), problem.simulate(hm)
+        vals = {}
+        for b, s0, a, c in zip(problem.bound, base, sp, sm):
+            for lab in b["out_labels"]:
+                num = np.linalg.norm(a[lab] - c[lab]) / (2 * rel_step)
+                vals[lab] = vals.get(lab, 0.0) + num / max(np.linalg.norm(s0[lab]), 1e-300)
+        out[name] = vals
+    return out

@@ -1,0 +1,81 @@
+"""The estimate, sensitivity and optimize commands on the example problem files."""
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from mechatron.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture()
+def example(tmp_path):
+    def copy(name):
+        shutil.copy(EXAMPLES / name, tmp_path / name)
+        return tmp_path / name
+    return copy
+
+
+def test_estimate_example_generates_its_data_and_writes_its_report(capsys, example,
+                                                                  tmp_path):
+    """The full acceptance case is in test_estimation_estimate.py; here a few iterations
+    check the command: data generated when absent, JSON with parameters and ci95, files,
+    progress on stderr, the human table."""
+    cfg = example("dc_motor_estimate.toml")
+    code, out, err = run(capsys, "estimate", str(cfg), "--json", "--max-iterations", "4",
+                         "--out", str(tmp_path / "out"))
+    assert code == 0, err
+    doc = json.loads(out)
+    assert (tmp_path / "dc_motor_data" / "multi_step.csv").exists()
+    assert set(doc["ci95"]) == set(doc["parameters"]) >= {"R", "L", "k", "J", "B"}
+    for lo, hi in doc["ci95"].values():
+        assert lo < hi
+    assert doc["cost"] < doc["cost_initial"]
+    assert "estimate: 0" in err                      # progress lines on stderr
+    assert (tmp_path / "out" / "estimate_fit.png").stat().st_size > 10000
+    saved = json.loads((tmp_path / "out" / "estimate.json").read_text())
+    assert saved["parameters"] == doc["parameters"]
+    code, out, err = run(capsys, "estimate", str(cfg), "--max-iterations", "1", "--quiet")
+    assert code == 0 and "95% interval" in out and "NRMSE" in out and err == ""
+
+
+def test_sensitivity_example(capsys, example):
+    cfg = example("dc_motor_sensitivity.toml")
+    code, out, err = run(capsys, "sensitivity", str(cfg), "--samples", "8", "--workers",
+                         "1", "--json", "--quiet")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["evaluations"] == 8 * (8 + 2)
+    assert doc["ranking"][0] == "k"
+    assert len(doc["best"]) == 5
+
+
+def test_optimize_example_meets_every_requirement(capsys, example):
+    cfg = example("dc_motor_speed_pi_optimize.toml")
+    code, out, err = run(capsys, "optimize", str(cfg), "--json", "--quiet")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["all_met"]
+    assert not all(r["start_met"] for r in doc["requirements"])
+
+
+def test_bad_problem_files_are_one_line_errors(capsys, tmp_path):
+    code, out, err = run(capsys, "estimate", str(tmp_path / "none.toml"))
+    assert code == 2 and "none.toml: no such file" in err
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[modle]\nname = 'x'\n")
+    code, out, err = run(capsys, "estimate", str(bad))
+    assert code == 2 and "unknown section(s) modle" in err
+    bad.write_text("[model]\nname = 'dc_motor'\nvariant = 'ode'\n[parameters]\nQ = 1\n"
+                   "[[experiments]]\nfile = 'x.csv'\n")
+    code, out, err = run(capsys, "estimate", str(bad))
+    assert code == 2 and "'Q' is not a parameter" in err

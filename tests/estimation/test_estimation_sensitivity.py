@@ -1,0 +1,101 @@
+"""Sensitivity analysis: sampling, Sobol indices against an analytic case, and the DC
+motor ranking against a finite-difference local sensitivity."""
+
+import numpy as np
+import pytest
+
+from mechatron.errors import ParameterError
+from mechatron.estimation import EstimationProblem, FreeParameter
+from mechatron.estimation.bench import TABLE_6_1, VirtualBench
+from mechatron.estimation.sensitivity import (Distribution, local_sensitivity,
+                                              run_sensitivity, sample, sobol_indices,
+                                              standardized_regression)
+
+
+def test_distributions_map_the_unit_interval():
+    u = np.array([0.1, 0.5, 0.9])
+    np.testing.assert_allclose(Distribution("uniform", 2, 4).ppf(u), [2.2, 3, 3.8])
+    np.testing.assert_allclose(Distribution("loguniform", 1, 100).ppf(u),
+                               [10 ** 0.2, 10, 10 ** 1.8])
+    from scipy.stats import norm
+    np.testing.assert_allclose(Distribution("normal", 1, 2).ppf(u), norm.ppf(u, 1, 2))
+    with pytest.raises(ParameterError, match="low must be > 0"):
+        Distribution("loguniform", 0, 1)
+
+
+def test_latin_hypercube_puts_one_sample_in_each_stratum():
+    X = sample({"a": Distribution("uniform", 0, 1), "b": Distribution("uniform", 0, 1)},
+               50, "lhs", seed=2)
+    for j in range(2):
+        assert sorted(np.floor(X[:, j] * 50).astype(int)) == list(range(50))
+
+
+def test_sobol_indices_of_an_additive_model_are_analytic():
+    """y = 4 a + 2 b + 0 c with independent U(0,1): S_a = 16/20, S_b = 4/20, S_c = 0."""
+    d = {n: Distribution("uniform", 0, 1) for n in "abc"}
+    A, B, AB = sample(d, 4096, "sobol", seed=1)
+
+    def f(X):
+        return 4 * X[..., 0] + 2 * X[..., 1]
+    S1, ST = sobol_indices(f(A), f(B), f(AB))
+    np.testing.assert_allclose(S1, [0.8, 0.2, 0.0], atol=0.02)
+    np.testing.assert_allclose(ST, [0.8, 0.2, 0.0], atol=0.02)
+
+
+def test_standardized_regression_coefficients_of_a_linear_model():
+    rng = np.random.default_rng(0)
+    X = rng.random((2000, 2))
+    y = 3 * X[:, 0] - X[:, 1]
+    src, r2 = standardized_regression(X, y)
+    # exact for a linear model: b_j std(x_j) / std(y)
+    expected = np.array([3, -1]) * X.std(0) / y.std()
+    np.testing.assert_allclose(src, expected, rtol=1e-10)
+    assert r2 == pytest.approx(1.0)
+
+
+@pytest.fixture(scope="module")
+def motor_problem():
+    bench = VirtualBench(seed=5)
+    step = bench.voltage_step(t_stop=0.02)
+    names = ["R", "L", "k", "J", "B", "T_C", "T_brk", "w_brk"]
+    free = [FreeParameter(n, TABLE_6_1[n], 0.0) for n in names]
+    return names, EstimationProblem(bench.model(), [step], free, inputs={"V": "V"},
+                                    outputs={"i": "i", "w": "rate(phi)"}, offsets=["i"])
+
+
+def test_ranking_agrees_with_local_finite_differences(motor_problem):
+    names, prob = motor_problem
+    dists = {n: Distribution("uniform", 0.7 * TABLE_6_1[n], 1.3 * TABLE_6_1[n])
+             for n in names}
+    res = run_sensitivity(prob, dists, n=64, method="sobol", workers=2, seed=3)
+    assert res.evaluations == 64 * (len(names) + 2) and res.failed == 0
+    local = local_sensitivity(prob, names)
+    score = {n: max(v.values()) for n, v in local.items()}
+    by_local = sorted(names, key=lambda n: -score[n])
+    # the three that matter most for current and speed come first in both
+    assert set(res.ranking[:3]) == set(by_local[:3])
+    # the breakaway parameters hardly matter in a run far from standstill: last in both
+    assert set(res.ranking[-2:]) == {"T_brk", "w_brk"} == set(by_local[-2:])
+    # best samples are sorted by cost and come from the samples
+    costs = [b["cost"] for b in res.best]
+    assert costs == sorted(costs)
+    assert res.throughput > 0
+
+
+def test_parallel_and_serial_evaluation_agree(motor_problem):
+    names, prob = motor_problem
+    dists = {n: Distribution("uniform", 0.9 * TABLE_6_1[n], 1.1 * TABLE_6_1[n])
+             for n in ("R", "k")}
+    a = run_sensitivity(prob, dists, n=16, method="lhs", workers=1)
+    b = run_sensitivity(prob, dists, n=16, method="lhs", workers=2)
+    np.testing.assert_allclose(a.Y, b.Y, rtol=1e-12)
+
+
+def test_a_problem_pickles_for_worker_processes(motor_problem):
+    """Process pools (spawn) and Dask ship the problem pickled: rebuilt with the same
+    substeps, it gives the same residuals."""
+    import pickle
+    _, prob = motor_problem
+    again = pickle.loads(pickle.dumps(prob))
+    assert [b["substeps"] for b in again.bound] == [b["substeps"] for b in prob.bound]
+    np.testing.assert_array_equal(again.residuals(prob.initial), prob.residuals(prob.initial))
