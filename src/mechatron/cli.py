@@ -763,6 +763,35 @@ def _demo_codegen(d: DemoRun) -> None:
     d.files += [Path(p) for p in (r["csv"], r.get("fmu")) if p]
 
 
+def _demo_estimation(d: DemoRun) -> None:
+    """The seed's chapter 6 on a virtual test bench whose hidden truth is table 6-1."""
+    from mechatron.estimation import demo_run
+    r = demo_run(d.out / "estimation")
+    cls = r["classic"]["errors_pct"]
+    d.say("  classic tests (locked rotor, steps, free run): "
+          + ", ".join(f"{n} {cls[n]:+.2f}%" for n in ("R", "L", "k", "J", "B")))
+    sens = r["sensitivity"]
+    d.say(f"  sensitivity: {sens['simulations']} simulations "
+          f"({sens['simulations_per_s']:.0f}/s), ranking {', '.join(sens['ranking'])}")
+    est = r["estimation"]
+    d.say(f"  estimation from the best sample, two experiments ({est['wall_s']:.2f} s, "
+          f"{est['iterations']} iterations):")
+    d.say(_table(["parameter", "truth", "estimate", "error", "95% interval"],
+                 [[n, _num(r["truth"][n], 5), _num(v, 6), f"{est['errors_pct'][n]:+.3f}%",
+                   f"[{_num(est['ci95'][n][0], 5)}, {_num(est['ci95'][n][1], 5)}]"]
+                  for n, v in est["values"].items()], right="123"))
+    opt = r["optimization"]
+    d.say(f"  speed PI optimized in {opt['iterations']} iterations: "
+          + ", ".join(f"{k} {v:.4g}" for k, v in opt["optimized"].items()))
+    for row in opt["requirements"]:
+        d.say(f"    {row['requirement']}: {row['start']:.4g} -> {row['optimized']:.4g} "
+              f"(limit {row['limit']}) {'met' if row['met'] else 'NOT met'}")
+    for what, ok in r["checks"].items():
+        d.check(f"chapter 6: {what}", 0.0 if ok else 1.0, 0.0)
+        d.say(f"  [{'ok' if ok else 'FAILED'}] {what}")
+    d.files += [Path(f) for f in r["files"]]
+
+
 #: The showcase, in order. Later features append or insert their own steps.
 DEMO_STEPS: list[DemoStep] = [
     DemoStep("Build the DC motor both ways: acausal network and hand-written ODEs",
@@ -778,6 +807,8 @@ DEMO_STEPS: list[DemoStep] = [
     DemoStep("Plots and simulation logs", _demo_files),
     DemoStep("The model database: expected values and variants compared", _demo_database),
     DemoStep("Diagram and HTML report of the DC motor", _demo_report),
+    DemoStep("Chapter 6 on a virtual bench: classic tests, sensitivity, estimation, "
+             "PI optimization", _demo_estimation),
     DemoStep("C code and FMU of the DC motor (fixed-step RK4 at 10 kHz)", _demo_codegen),
 ]
 
