@@ -41,7 +41,7 @@ def test_models_json_lists_dc_motor(capsys):
     names = [m["name"] for m in data["models"]]
     assert "dc_motor" in names
     motor = data["models"][names.index("dc_motor")]
-    assert motor["variants"] == ["acausal", "ode"]
+    assert motor["variants"] == ["acausal", "ode", "blocks"]
     assert motor["description"]
 
 
@@ -71,7 +71,8 @@ def test_show_json(capsys):
                                        "description": "Armature inductance",
                                        "source": "seed table 6-1, calculated"}
     assert data["outputs"]["w"] == {"unit": "rad/s",
-                                    "paths": {"acausal": "inertia.w", "ode": "w"}}
+                                    "paths": {"acausal": "inertia.w", "ode": "w",
+                                              "blocks": "speed.y"}}
     assert data["experiment"]["t_stop"] == 0.5
     assert data["expected"]["w"] == pytest.approx(W_FINAL, rel=1e-12)
 
@@ -235,11 +236,13 @@ def test_compare_variants_agree(capsys, tmp_path):
 
 def test_compare_json(capsys):
     data = run_json(capsys, "compare", "dc_motor")
-    assert data["reference"] == "acausal" and data["variants"] == ["acausal", "ode"]
+    assert data["reference"] == "acausal"
+    assert data["variants"] == ["acausal", "ode", "blocks"]
     assert data["points"] == 1001
-    for label in ("w", "i"):
-        assert data["deviations"]["ode"][label]["max_rel"] < 1e-6
-    assert data["final"]["ode"]["w"] == pytest.approx(W_FINAL, rel=1e-5)
+    for variant in ("ode", "blocks"):
+        for label in ("w", "i"):
+            assert data["deviations"][variant][label]["max_rel"] < 1e-6
+        assert data["final"][variant]["w"] == pytest.approx(W_FINAL, rel=1e-5)
 
 
 # ----------------------------------------------------------------------------------- demo

@@ -571,6 +571,19 @@ class SimResult:
             fig.savefig(path, dpi=100)
         return fig
 
+    def animate(self, path: str | os.PathLike[str], **options: Any) -> Path:
+        """Write an animation (``.gif``, or ``.mp4`` with ffmpeg) of the planar mechanism
+        in this log; see :func:`mechatron.viz.animate` for the options.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
+        from mechatron.viz import animate
+
+        return animate(self, path, **options)
+
     # ------------------------------------------------------------------------ helpers
     def _where(self) -> str:
         return f"simlog of {self.model_name!r}" if self.model_name else "simlog"

@@ -20,7 +20,8 @@ from mechatron.units import to_si
 
 __all__ = ["CompiledModel"]
 
-_FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition", "f_scales")
+_FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition", "f_scales",
+          "f_events")
 
 
 @dataclass
@@ -65,6 +66,9 @@ class CompiledModel:
     f_dist: ca.Function = None
     f_transition: ca.Function = None
     f_scales: ca.Function = None
+    #: ``X`` after the events found at a point (ticks due, relations changed, their
+    #: actions): called at the initial time and at the end of every fixed step.
+    f_events: ca.Function = None
     param_bounds: list = field(default_factory=list)   # (min or None, max or None)
     report: dict = field(default_factory=dict)
     _cache: dict = field(default_factory=dict, repr=False, compare=False)

@@ -17,8 +17,9 @@ from mechatron.core.context import BuildContext
 from mechatron.core.declarations import (Across, Input, Output, Parameter, Start, Through,
                                          Variable)
 from mechatron.core.domains import SIGNAL
+from mechatron.core.events import EventAction
 from mechatron.errors import ConnectError, ModelError, ParameterError, UnitError
-from mechatron.units import to_si
+from mechatron.units import dimensionality, to_si
 
 __all__ = ["FlatModel", "FlatVariable", "FlatParameter", "FlatEquation", "flatten"]
 
@@ -45,6 +46,7 @@ class FlatVariable:
     start: float | None = None
     priority: str = "none"
     hint: str = ""     # what to try when this variable is left unmatched
+    state_select: str = "default"   # "avoid" / "default" / "prefer" (state selection hint)
 
 
 @dataclass
@@ -67,6 +69,8 @@ class FlatModel:
     #: Each connection set as a list of (port path, Domain, is_output); ``is_output`` is
     #: True for a signal output driving the set. For diagrams and reports.
     connection_sets: list = field(default_factory=list)
+    #: Event actions (``mt.sample``/``mt.when``) as (EventAction, owner path).
+    events: list = field(default_factory=list)
 
     @property
     def time(self) -> ca.SX:
@@ -219,7 +223,8 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
                     priority = given.priority
                 flat.variables[path] = FlatVariable(path, sym, decl.unit, decl.doc, kind,
                                                     owner_path, start, priority,
-                                                    _domain_hint(el, decl))
+                                                    _domain_hint(el, decl),
+                                                    getattr(decl, "state_select", "default"))
                 ctx.unknowns[path] = sym
         el._syms = syms
 
@@ -265,7 +270,11 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                 if isinstance(item, Connect):
                     connects.append((item, where))
                     continue
+                if isinstance(item, EventAction):
+                    flat.events.append((item, el.path))
+                    continue
                 _add_equation(flat, el, klass, k, item, problems)
+    _discrete_states(flat, problems)
     pending = [eq for eq in flat.equations if eq.residual is None]
     if pending:
         res = ca.vertcat(*[eq.origin.lhs for eq in pending]) - \
@@ -273,6 +282,29 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
         for eq, r in zip(pending, ca.vertsplit(res)):
             eq.residual = r
     return connects
+
+
+def _discrete_states(flat: FlatModel, problems) -> None:
+    """Check the targets of event actions; a target not differentiated anywhere is a
+    discrete state: constant between events, ``der(v) == 0``."""
+    ctx = flat.context
+    by_sym = {v.sym.name(): v for v in flat.variables.values()}
+    done: set[str] = set()
+    for action, owner in flat.events:
+        for var, _ in action.outputs + action.updates:
+            name = var.name() if var.is_scalar() and var.is_symbolic() else None
+            fv = by_sym.get(name) if name else None
+            if fv is None or fv.kind == "input":
+                problems.append(f"{owner or flat.name}: an event action assigns "
+                                f"{str(var)[:40]}, which is not a variable of the model. "
+                                "Assign a Variable or Output of the component.")
+                continue
+            if name in done or name in ctx.derivative:
+                continue
+            done.add(name)
+            flat.equations.append(FlatEquation(
+                ctx.der_symbol(name), f"{owner or flat.name}: der({name}) == 0 "
+                "(discrete state, changed only by events)", owner))
 
 
 def _add_equation(flat, el, klass, k, item, problems) -> None:
@@ -441,9 +473,26 @@ def _signal_set(flat: FlatModel, group: list[SignalRef], problems) -> None:
                         "connected together; an input can be driven by one output only.")
         return
     src = outputs[0].path()
+    unit = outputs[0].declaration.unit
     for g in group:
         if g is not outputs[0]:
+            if not _units_compatible(unit, g.declaration.unit):
+                problems.add(UnitError,
+                             f"cannot connect signal '{src}' ({unit}) to '{g.path()}' "
+                             f"({g.declaration.unit}): the units have different "
+                             f"dimensions ({dimensionality(unit)} vs "
+                             f"{dimensionality(g.declaration.unit)}). Convert with a "
+                             "physical_signals.PSGain with units, or pass a plain "
+                             "signal through PhysicalToSignal/SignalToPhysical.")
+                continue
             flat.aliases.append((g.path(), src, 1.0, f"connect({src}, {g.path()})"))
+
+
+def _units_compatible(a: str, b: str) -> bool:
+    """Signal units match if their dimensions agree; a dimensionless signal (a plain
+    causal signal, unit "1") connects to any unit."""
+    da, db = dimensionality(a), dimensionality(b)
+    return not da or not db or da == db
 
 
 def _physical_set(flat: FlatModel, group: list[Connector]) -> None:

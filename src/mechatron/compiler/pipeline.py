@@ -10,6 +10,8 @@ import numpy as np
 
 from mechatron.compiler.alias import eliminate_aliases
 from mechatron.compiler.compiled import CompiledModel
+from mechatron.compiler.events import Lowering as EventLowering
+from mechatron.compiler.events import clock_distances, direct_relations, prepare_events
 from mechatron.compiler.flatten import flatten
 from mechatron.compiler.relations import extract_relations
 from mechatron.compiler.structure import lower
@@ -69,6 +71,7 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     owners = [eq.owner for eq in alias.equations]
     residuals, relations = extract_relations(
         residuals, owners, unknown_syms + der_syms + p_syms + [ctx.time])
+    plan = prepare_events(flat, alias, relations)
     lap("relations")
 
     syms = {n: flat.variables[n].sym for n in alias.unknowns}
@@ -81,7 +84,7 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     hints = {n: v.hint for n, v in flat.variables.items() if v.hint}
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
-                ctx.time, start_guess, hints)
+                ctx.time, start_guess, hints, preference=_state_preference(flat, alias))
     lap("structure")
 
     # every logged variable as an expression of the unknowns
@@ -95,9 +98,14 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
             out_expr.append(flat.variables[n].sym)
     dists = [r.d for r in relations]
     n_ode, n_res, n_out = len(low.ode), len(low.residuals), len(out_expr)
-    pile = list(low.ode) + list(low.residuals) + out_expr + dists
+    pile = list(low.ode) + list(low.residuals) + out_expr + dists + plan.exprs
     if low.assigned:
         _, pile = ca.substitute_inplace(low.assigned, low.assigned_expr, pile, False)
+    if plan:   # action right-hand sides: relations read directly, not through modes
+        n_act = len(plan.exprs)
+        plan.exprs = direct_relations(pile[len(pile) - n_act:], relations,
+                                      pile[len(pile) - n_act - len(dists):len(pile) - n_act])
+        pile = pile[:len(pile) - n_act]
     # bind relation placeholders to modes
     modes = ca.SX.sym("mode", len(relations))
     counters = ca.SX.sym("events", len(relations))
@@ -110,6 +118,8 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     res = pile[n_ode:n_ode + n_res]
     outs = pile[n_ode + n_res:n_ode + n_res + n_out]
     dist = pile[n_ode + n_res + n_out:]
+    for k, d_clock in clock_distances(plan, relations, ctx.time, counters).items():
+        dist[k] = d_clock
 
     t = ctx.time
     x = ca.vertcat(*low.state_syms) if low.state_syms else ca.SX(0, 1)
@@ -129,22 +139,19 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     # is exactly zero (a pulse starting at t = 0 rises; it is not "off")
     ddot = ca.jacobian(dvec, t) + ca.jtimes(dvec, X, xdot) if nr else ca.SX(0, 1)
     f_dist = ca.Function("dist", args, [dvec, ddot], argn, ["d", "d_dot"])
-    f_zero = ca.Function("zero", args, [modes * dvec if nr else ca.SX(0, 1)], argn,
-                         ["zero"])
+    # + 1e-300: an indicator exactly 0 at the end of a step (an edge falling on an output
+    # time) would be followed by a negative value without a sign change the solver sees
+    f_zero = ca.Function("zero", args, [modes * dvec + 1e-300 if nr else ca.SX(0, 1)],
+                         argn, ["zero"])
     index = ca.SX.sym("index")
-    sel = ca.vertcat(*[index == k for k in range(nr)]) if nr else ca.SX(0, 1)
-    flipped = modes * (1 - 2 * sel)
-    # the event's relation flips; every other mode is re-read at the new point, so that
-    # relations whose distance jumped at this event (e.g. after a reset) stay consistent
-    d_post, d_dot = f_dist(t, ca.vertcat(x, flipped, counters, tlast), z, p)
-    rule = ca.vertcat(*[ca.if_else(d_post[k] > 0, 1, ca.if_else(
-        d_post[k] < 0, -1, ca.if_else(d_dot[k] > 0, 1, ca.if_else(
-            d_dot[k] < 0, -1, 1.0 if r.op != "<" else -1.0))))
-        for k, r in enumerate(relations)]) if nr else ca.SX(0, 1)
-    new_modes = sel * flipped + (1 - sel) * rule
-    post = ca.vertcat(x, new_modes, counters + sel, tlast + sel * (t - tlast))
+    events = EventLowering(plan, relations, flat, alias, list(low.states),
+                           list(low.state_syms), flat.name)
+    post = events.transition(f_dist, index, t, x, modes, counters, tlast, z, p) if nr \
+        else X
     f_transition = ca.Function("transition", [index, t, X, z, p], [post, z],
                                ca.event_in()[:5], ["post_x", "post_z"])
+    f_events = ca.Function("events", args, [events.step_events(
+        f_dist, t, x, modes, counters, tlast, z, p) if nr else X], argn, ["post_x"])
     scales = ca.vertcat(*flat.time_scales) if flat.time_scales else ca.SX(0, 1)
     f_scales = ca.Function("scales", [p], [scales], ["p"], ["scales"])
     lap("lowering")
@@ -178,6 +185,8 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
         "blocks": low.n_blocks, "largest_block": low.largest_block,
         "tearing_variables": low.n_torn,
         "relations": len(relations),
+        "event_actions": len(plan.groups),
+        "when_relations": [k for k, w in enumerate(events.is_when) if w],
         "timings": timings,
     }
     cm = CompiledModel(
@@ -190,9 +199,30 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
         x_start=np.array(state_starts, dtype=float), x_priority=state_prior,
         z_start=z_start, targets=targets, f_ode=f_ode, f_alg=f_alg, f_out=f_out,
         f_zero=f_zero, f_dist=f_dist, f_transition=f_transition, f_scales=f_scales,
+        f_events=f_events,
         param_bounds=[q.bounds for q in params], report=report)
     timings["total"] = sum(timings.values())
     return cm
+
+
+_STATE_SELECT = {"avoid": -1.0, "default": 0.0, "prefer": 1.0}
+
+
+def _state_preference(flat, alias) -> dict[str, float]:
+    """State preference of each alias representative: the highest ``state_select`` of
+    its alias class, plus one half for a high-priority start value (the coordinates a
+    user fixes initially are the ones to integrate). Only nonzero entries."""
+    pref: dict[str, float] = {}
+    for n, var in flat.variables.items():
+        level = _STATE_SELECT.get(var.state_select, 0.0)
+        if level:
+            rep = alias.eliminated.get(n, (n, 1.0))[0]
+            if rep is not None:
+                pref[rep] = max(pref.get(rep, level), level)
+    for rep, (_, prio, _) in alias.starts.items():
+        if prio == "high":
+            pref[rep] = pref.get(rep, 0.0) + 0.5
+    return {n: v for n, v in pref.items() if v}
 
 
 def _guess(flat, alias, name: str) -> float:

@@ -51,7 +51,8 @@ def _csr(expr: ca.SX, syms: ca.SX) -> list[list[int]]:
 
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
           syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
-          start_guess, hints: dict[str, str]) -> Lowered:
+          start_guess, hints: dict[str, str],
+          preference: dict[str, float] | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
@@ -65,6 +66,12 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         ``start_guess(list_of_syms) -> ndarray``, numeric point for Jacobian-based choices.
     hints
         A hint per variable name for messages about unmatched variables.
+    preference : dict, optional
+        State preference per unknown name (0 default, > 0 rather a state, < 0 rather a
+        dummy derivative); the derivatives of a variable inherit its preference. Columns
+        of the state-selection Jacobian are scaled by ``10**(-3*preference)`` before the
+        pivoted QR, so a preferred variable is made dummy only when no other choice is
+        nonsingular.
     """
     # -- variables of the structural problem: unknowns and their derivatives -------------
     var_syms: list[ca.SX] = [syms[n] for n in unknowns]
@@ -107,18 +114,48 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     adj = ir.adj
     var_to_diff = ir.var_to_diff
 
+    pref = preference or {}
+    n_orig = len(residuals)
+    is_derivative = set(d for d in ir.var_to_diff if d != -1)
+    point: dict[str, float] = {}
+    assembled: list[bool] = []
+
+    def guess(free):
+        """Start values, corrected to satisfy the position-level constraints (done once,
+        on the first call): the Jacobians that choose the states are then evaluated at
+        an assembled configuration, not at zeros that may put every link on one line."""
+        if pref and not assembled:
+            point.update(_assembled(res[:n_orig], adj[:n_orig], var_syms, is_derivative,
+                                    start_guess, set(pref)))
+            assembled.append(True)
+        base = start_guess(free)
+        return [point.get(s.name(), b) for s, b in zip(free, base)]
+
+    def weight(v: int) -> float:
+        name = var_names[v]
+        while name.startswith("der(") and name.endswith(")"):
+            name = name[4:-1]
+        return float(pref.get(name, 0.0))
+
     def select(eqs, candidates, k):
         jac = ca.jacobian(ca.vertcat(*[res[e] for e in eqs]),
                           ca.vertcat(*[var_syms[c] for c in candidates]))
         free = ca.symvar(jac)
         fun = ca.Function("jac_select", free, [jac])
-        value = np.array(fun.call(start_guess(free))[0], dtype=float)
+        value = np.array(fun.call(guess(free))[0], dtype=float)
         value = np.atleast_2d(value).reshape(len(eqs), len(candidates))
         from scipy.linalg import qr
-        _, _, piv = qr(value, pivoting=True)
-        return [candidates[j] for j in piv[:k]]
+        scale = np.array([10.0 ** (-3.0 * weight(c)) for c in candidates])
+        _, _, piv = qr(value * scale, pivoting=True)
+        chosen = piv[:k]
+        if pref and k and _singular(value[:, chosen]):
+            _raise_singular_selection(name, [orig[e] for e in eqs],
+                                      [var_names[c] for c in candidates])
+        return [candidates[j] for j in chosen]
 
-    dummies = set(dummy_derivatives(ir, select=select)) if differentiated else set()
+    priority = [-weight(v) for v in range(len(var_syms))] if pref else None
+    dummies = (set(dummy_derivatives(ir, select=select, priority=priority))
+               if differentiated else set())
     states = [v for v, d in enumerate(var_to_diff) if d != -1 and d not in dummies]
     is_state = [False] * len(var_syms)
     for v in states:
@@ -131,11 +168,20 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
                                     if allowed[v]):
         _raise_structural(name, res, orig, var_names, m, allowed, hints)
     blocks = block_lower_triangular(len(var_syms), adj, m)
+    if pref and differentiated:
+        for block in blocks:
+            if len(block.equations) > 1:
+                _check_selection(name, res, orig, var_syms, var_names, block, guess)
+    else:
+        for block in blocks:
+            if 1 < len(block.equations) <= _LOOP_CHECK_MAX:
+                _check_loop(name, res, orig, var_syms, var_names, block, guess, time)
     out = Lowered(states=[var_names[v] for v in states], state_syms=[var_syms[v] for v in states],
                   alg=[], alg_syms=[], ode=[], residuals=[], assigned=[], assigned_expr=[],
                   differentiated=differentiated, n_blocks=len(blocks),
                   n_equations=len(res), n_unknowns=sum(allowed))
     coef_cache: dict[tuple[int, int], ca.SX | None] = {}
+    unknown_names = {x.name() for x in var_syms}
 
     def coefficient(e: int, v: int):
         """d res[e] / d v when res[e] is linear in v with a nonzero coefficient, else None."""
@@ -169,10 +215,154 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
                 out.alg_syms.append(var_syms[v])
                 out.residuals.append(res[e])
             continue
-        _solve_block(out, eqs, vs, adj, res, var_syms, var_names, coefficient)
+        _solve_block(out, eqs, vs, adj, res, var_syms, var_names, coefficient,
+                     unknown_names)
     for v in states:
         out.ode.append(var_syms[var_to_diff[v]])
     return out
+
+
+_ASSEMBLY_MAX = 3000   # largest position-level system assembled at compile time
+
+
+def _assembled(res, adj, var_syms, is_derivative, start_guess, keep) -> dict[str, float]:
+    """A point near the start values that satisfies the equations free of derivatives
+    (kinematic constraints, algebraic relations), by Gauss-Newton with minimum-norm steps.
+
+    First the variables with a nonzero start value or a state preference (``keep``)
+    are held and only the others move (positions of frames that follow from the joint
+    coordinates); if that cannot satisfy the equations (inconsistent start values),
+    every variable moves, the held ones 1000 times less. Returns ``{name: value}`` of the
+    variables moved; empty when the system is too large or the iteration fails."""
+    rows = [e for e in range(len(res)) if not any(v in is_derivative for v in adj[e])]
+    cols = sorted({v for e in rows for v in adj[e]})
+    if not rows or not cols or len(cols) > _ASSEMBLY_MAX:
+        return {}
+    xs = [var_syms[v] for v in cols]
+    r = ca.vertcat(*[res[e] for e in rows])
+    x = ca.vertcat(*xs)
+    params = [s for s in ca.symvar(r) if not ca.depends_on(s, x)]
+    fun = ca.Function("assemble", [x] + params, [r, ca.jacobian(r, x)])
+    x0 = np.array(start_guess(xs), dtype=float)
+    pv = [float(v) for v in start_guess(params)]
+    held = (x0 != 0.0) | np.array([s.name() in keep for s in xs])
+    for scale in (np.where(held, 0.0, 1.0), np.where(held, 1e-3, 1.0)):
+        xk = _gauss_newton(fun, x0.copy(), pv, scale)
+        if xk is not None:
+            return {s.name(): float(v) for s, v, v0 in zip(xs, xk, x0) if v != v0}
+    return {}
+
+
+def _gauss_newton(fun, xk, pv, scale, iterations: int = 30):
+    """Minimum-norm Gauss-Newton on ``fun(x) = 0`` in the scaled variables; ``None`` if
+    it does not converge."""
+    for _ in range(iterations):
+        rv, jv = fun(xk, *pv)
+        rv = np.array(rv, dtype=float).ravel()
+        ok = np.isfinite(rv)
+        if np.all(ok) and np.max(np.abs(rv), initial=0.0) < 1e-12:
+            return xk
+        # a residual or derivative that is not finite (0/0 or sqrt at 0: coincident
+        # points at the zero guess) carries no direction this iteration; the rows that
+        # do move the iterate away from it
+        jd = np.nan_to_num(np.array(jv, dtype=float), nan=0.0, posinf=0.0,
+                           neginf=0.0) * scale
+        jd[~ok] = 0.0
+        rv = np.where(ok, rv, 0.0)
+        try:
+            step = np.linalg.lstsq(jd, -rv, rcond=None)[0]
+        except np.linalg.LinAlgError:
+            return None
+        xk = xk + scale * step
+    return None
+
+
+def _check_selection(name, res, orig, var_syms, var_names, block, guess) -> None:
+    """With the states chosen, every algebraic loop must be solvable for its unknowns:
+    the loop's Jacobian at the (assembled) start point must be nonsingular. A singular
+    one names the equations and variables of its null space."""
+    eqs, cols = list(block.equations), list(block.variables)
+    if len(eqs) > _ASSEMBLY_MAX:
+        return
+    jac = ca.jacobian(ca.vertcat(*[res[e] for e in eqs]),
+                      ca.vertcat(*[var_syms[v] for v in cols]))
+    free = ca.symvar(jac)
+    value = np.array(ca.Function("jac_check", free, [jac]).call(guess(free))[0],
+                     dtype=float).reshape(len(eqs), len(cols))
+    if not _singular(value):
+        return
+    u, _, vt = np.linalg.svd(value)
+    suspects = [str(orig[eqs[i]]) for i in np.argsort(-np.abs(u[:, -1]))[:6]
+                if abs(u[i, -1]) > 1e-3]
+    vs = [var_names[cols[j]] for j in np.argsort(-np.abs(vt[-1]))[:8]
+          if abs(vt[-1, j]) > 1e-3]
+    _raise_singular_selection(name, suspects, vs)
+
+
+_LOOP_CHECK_MAX = 200   # largest algebraic loop checked for singularity at compile time
+
+
+def _check_loop(name, res, orig, var_syms, var_names, block, guess, time) -> None:
+    """An algebraic loop (a strongly connected block of equations) must have a unique
+    solution: its Jacobian at the start values must be nonsingular. A singular loop (e.g.
+    a sum whose output feeds back through a gain of exactly 1) is reported with the
+    components of the equations in it."""
+    eqs, cols = list(block.equations), list(block.variables)
+    jac = ca.jacobian(ca.vertcat(*[res[e] for e in eqs]),
+                      ca.vertcat(*[var_syms[v] for v in cols]))
+    free = ca.symvar(jac)
+    # only a loop whose Jacobian is fixed by the parameters is singular for good; one that
+    # depends on unknowns, time or modes may be singular at the start guess only
+    unknown = {s.name() for s in var_syms} | {time.name()}
+    if any(s.name() in unknown or "[" in s.name() for s in free):
+        return
+    try:
+        value = np.array(ca.Function("loop_check", free, [jac]).call(guess(free))[0],
+                         dtype=float).reshape(len(eqs), len(cols))
+    except Exception:   # noqa: BLE001 - a loop that cannot be evaluated is left to the solver
+        return
+    if not np.all(np.isfinite(value)):
+        return
+    # equilibrate rows and columns (physical units spread entries over many decades: a
+    # pipe of 1e10 Pa s/m^3 beside a pump of 2e-6 m^3/rad), then ask for an exact-zero
+    # singular value: only a loop singular for any scaling is reported
+    for axis in (1, 0):
+        peak = np.max(np.abs(value), axis=axis, keepdims=True)
+        value = value / np.where(peak > 0, peak, 1.0)
+    sv = np.linalg.svd(value, compute_uv=False)
+    if sv.size and sv[-1] > 1e-13 * max(sv[0], 1.0):
+        return
+    owners = []
+    for e in eqs:
+        where = getattr(orig[e], "where", None) or str(orig[e]).split(":")[0]
+        if where not in owners:
+            owners.append(where)
+    raise StructuralError(
+        f"model '{name}': the algebraic loop through {', '.join(owners)} has no unique "
+        f"solution (its {len(eqs)} equations are singular for "
+        f"{', '.join(var_names[v] for v in cols[:8])} at the start values: a loop gain of "
+        "exactly 1?). Change a gain, or break the loop with a delay or a state (e.g. "
+        "blocks.FirstOrder, blocks.UnitDelay).",
+        equations=[str(orig[e]) for e in eqs], variables=owners, path=name)
+
+
+def _singular(a: np.ndarray) -> bool:
+    """Whether the square matrix ``a`` is numerically singular (False when it holds
+    entries that are not finite: then nothing can be told)."""
+    if not np.all(np.isfinite(a)):
+        return False
+    s = np.linalg.svd(a, compute_uv=False)
+    return s.size == 0 or s[-1] <= 1e-10 * max(1.0, s[0])
+
+
+def _raise_singular_selection(name, eqs, candidates) -> None:
+    raise StructuralError(
+        f"model '{name}': state selection is singular at the start values: the "
+        f"constraints {'; '.join(str(e) for e in eqs[:6])} cannot be solved for "
+        f"{', '.join(candidates[:8])} with the states chosen. The mechanism "
+        "may start in a singular configuration (links aligned, a dead point); change the "
+        "initial position, or remove a redundant constraint.",
+        equations=[str(e) for e in eqs], variables=list(candidates), path=name)
 
 
 def _is_symbol(expr: ca.SX, name: str) -> bool:
@@ -205,8 +395,18 @@ def _solve_linear(r: ca.SX, x: ca.SX, coef: ca.SX) -> ca.SX:
     return -rest / coef
 
 
-def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, coefficient) -> None:
-    t = tear(eqs, vs, adj, lambda e, v: coefficient(e, v) is not None)
+def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, coefficient,
+                 unknown_names: set[str]) -> None:
+    # the sequence divides by its coefficients: only those free of unknowns are safe (a
+    # coefficient such as sin(q) of a rigid link vanishes in some configurations and
+    # would turn a nonsingular loop into 0/0); the loop's linear part is then solved by
+    # QR on the tearing variables
+    def safe(e: int, v: int) -> bool:
+        coef = coefficient(e, v)
+        return coef is not None and (coef.is_constant() or not any(
+            x.name() in unknown_names for x in ca.symvar(coef)))
+
+    t = tear(eqs, vs, adj, safe)
     out.n_torn += len(t.tearing_vars)
     seq_syms = [var_syms[v] for _, v in t.sequence]
     seq_expr = [_solve_linear(res[e], var_syms[v], coefficient(e, v)) for e, v in t.sequence]

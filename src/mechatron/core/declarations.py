@@ -18,6 +18,7 @@ __all__ = ["Parameter", "Variable", "Across", "Through", "Input", "Output", "Sta
            "PRIORITIES"]
 
 PRIORITIES = ("high", "low", "none")
+STATE_SELECT = ("avoid", "default", "prefer")
 _order = itertools.count()
 
 
@@ -104,6 +105,10 @@ class Variable(Declaration):
     priority : {"high", "low", "none"}
         How strongly initialization must meet ``start`` (Simscape's variable priority).
         Defaults to ``"none"``; a start value given by the user on an instance is ``high``.
+    state_select : {"avoid", "default", "prefer"}
+        Hint for state selection after index reduction (Modelica's ``StateSelect``):
+        ``"prefer"`` keeps the variable as a state when the constraints allow a choice
+        (joint coordinates), ``"avoid"`` makes it algebraic first.
     doc : str
         One-line description.
     """
@@ -111,13 +116,17 @@ class Variable(Declaration):
     kind = "variable"
 
     def __init__(self, unit: str = "1", *, start: float | None = None,
-                 priority: str = "none", doc: str = ""):
+                 priority: str = "none", state_select: str = "default", doc: str = ""):
         super().__init__(unit, doc=doc)
         if priority not in PRIORITIES:
             raise ValueError(f"Variable: priority must be one of {PRIORITIES}, "
                              f"got {priority!r}.")
+        if state_select not in STATE_SELECT:
+            raise ValueError(f"Variable: state_select must be one of {STATE_SELECT}, "
+                             f"got {state_select!r}.")
         self.start = start
         self.priority = priority
+        self.state_select = state_select
 
 
 class Across(Variable):

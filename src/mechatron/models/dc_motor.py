@@ -1,4 +1,5 @@
-"""The brush DC motor of the seed (its table 6-1, calculated values), in two variants.
+"""The brush DC motor of the seed (its table 6-1, calculated values), in three variants:
+an acausal network, user-written ODEs, and a Simulink-style block diagram.
 
 Armature: ``L di/dt = V - R i - k w``; rotor: ``J dw/dt = k i - B w``. A voltage step of
 ``V`` at ``t = 0``. The analytic final speed is ``k V / (R B + k^2)``.
@@ -54,6 +55,31 @@ class DCMotorODE(mt.Component):
                 self.J * mt.der(self.w) == self.k * self.i - self.B * self.w]
 
 
+def _blocks(V, R, L, k, J, B):
+    """The "standard Simulink" model of the seed: two integrators closed by gains and sums.
+
+    ``di/dt = (V - R i - k w) / L`` and ``dw/dt = (k i - B w) / J``: the sums form the
+    armature voltage balance and the torque balance, the gains divide by ``L`` and ``J``.
+    """
+    from mechatron.library import blocks
+    m = mt.System("dc_motor", doc="DC motor, Simulink-style block diagram")
+    supply = m.add("supply", blocks.Constant(value=V))
+    v_sum = m.add("v_sum", blocks.Add3(k1=1.0, k2=-R, k3=-k))
+    inv_l = m.add("inv_L", blocks.Gain(k=1.0 / L))
+    current = m.add("current", blocks.Integrator(y=0.0))
+    t_sum = m.add("torque_sum", blocks.Add(k1=k, k2=-B))
+    inv_j = m.add("inv_J", blocks.Gain(k=1.0 / J))
+    speed = m.add("speed", blocks.Integrator(y=0.0))
+    m.connect(supply.y, v_sum.u1)
+    m.connect(current.y, v_sum.u2, t_sum.u1)
+    m.connect(speed.y, v_sum.u3, t_sum.u2)
+    m.connect(v_sum.y, inv_l.u)
+    m.connect(inv_l.y, current.u)
+    m.connect(t_sum.y, inv_j.u)
+    m.connect(inv_j.y, speed.u)
+    return m
+
+
 def _acausal(V, R, L, k, J, B):
     m = DCMotorAcausal(
         doc="DC motor, acausal network")
@@ -85,9 +111,10 @@ ENTRY = register(ModelEntry(
         "J": ParameterInfo("kg*m^2", 4.8e-6, "Rotor inertia", SEED),
         "B": ParameterInfo("N*m*s/rad", 1.236e-4, "Viscous friction coefficient", SEED),
     },
-    variants={"acausal": _acausal, "ode": _ode},
+    variants={"acausal": _acausal, "ode": _ode, "blocks": _blocks},
     outputs={"acausal": {"w": "inertia.w", "i": "inductor.i"},
-             "ode": {"w": "w", "i": "i"}},
+             "ode": {"w": "w", "i": "i"},
+             "blocks": {"w": "speed.y", "i": "current.y"}},
     output_units={"w": "rad/s", "i": "A"},
     experiment=Experiment(t_stop=0.5, rtol=1e-8, atol=1e-10),
     expected={"w": 0.151 * 19.2 / (7.1 * 1.236e-4 + 0.151 ** 2),

@@ -24,7 +24,8 @@ from mechatron.errors import SimulationError
 
 CHUNK = 2000   # steps per native fixed-step loop
 
-__all__ = ["METHODS", "ExplicitMethod", "ImplicitMethod", "make_step", "integrate_fixed"]
+__all__ = ["METHODS", "ExplicitMethod", "ImplicitMethod", "ExtrapolatedMethod", "make_step",
+           "integrate_fixed"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,25 @@ class ImplicitMethod:
     order: int
 
 
+@dataclass(frozen=True)
+class ExtrapolatedMethod:
+    """Implicit Euler extrapolation, in the spirit of Simulink's ``ode14x``.
+
+    One step ``h`` is taken ``len(sequence)`` times with backward Euler, as ``n_j`` equal
+    substeps for each ``n_j`` of ``sequence`` (each substep solved by a fixed number of
+    Newton iterations from an explicit Euler predictor), and the results ``T_j1`` are
+    combined by Aitken-Neville extrapolation for an error expansion in powers of ``h``:
+    ``T_j,l+1 = T_j,l + (T_j,l - T_j-1,l) / (n_j / n_j-l - 1)``. With the harmonic
+    sequence ``(1, 2, 3)`` the result is of order 3; its stability function vanishes at
+    infinity (stiff decay, like backward Euler). Limitation: the order assumes Newton has
+    converged; with too few iterations on a strongly nonlinear model the order drops.
+    """
+
+    name: str
+    sequence: tuple[int, ...]
+    order: int
+
+
 METHODS = {
     "euler": ExplicitMethod("euler", ((),), (1.0,), (0.0,), 1),
     "heun": ExplicitMethod("heun", ((), (1.0,)), (0.5, 0.5), (0.0, 1.0), 2),
@@ -55,6 +75,7 @@ METHODS = {
                           (1 / 6, 1 / 3, 1 / 3, 1 / 6), (0.0, 0.5, 0.5, 1.0), 4),
     "backward_euler": ImplicitMethod("backward_euler", 1.0, 1),
     "trapezoidal": ImplicitMethod("trapezoidal", 0.5, 2),
+    "ode14x": ExtrapolatedMethod("ode14x", (1, 2, 3), 3),
 }
 
 
@@ -74,6 +95,33 @@ def _newton_z(cm: CompiledModel, t, X, z, p, iterations: int):
         jz, gz = ca.substitute([jac, gs], [zs], [z])
         z = z - ca.solve(jz, gz)
     return z
+
+
+def _euler_extrapolation(f, t, x0, z, h: float, sequence, iterations: int):
+    """Backward Euler over ``h`` with ``n`` substeps for each ``n`` in ``sequence``,
+    extrapolated (Aitken-Neville, powers of ``h``); see :class:`ExtrapolatedMethod`."""
+    xs = ca.SX.sym("xs", x0.numel())
+    rows = []
+    for n in sequence:
+        hs = h / n
+        xk = x0
+        for k in range(n):
+            tk = t + k * hs
+            fk, z = f(tk, xk, z)
+            fs, _ = f(tk + hs, xs, z)
+            resid = xs - xk - hs * fs
+            jac = ca.jacobian(resid, xs)
+            xn = xk + hs * fk
+            for _ in range(max(1, iterations)):
+                jx, rx = ca.substitute([jac, resid], [xs], [xn])
+                xn = xn - ca.solve(jx, rx)
+            xk = xn
+        row = [xk]
+        for j in range(1, len(rows) + 1):
+            ratio = n / sequence[len(rows) - j]
+            row.append(row[j - 1] + (row[j - 1] - rows[-1][j - 1]) / (ratio - 1))
+        rows.append(row)
+    return rows[-1][-1], z
 
 
 def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) -> ca.Function:
@@ -115,6 +163,8 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
         x1 = x0
         for bi, k in zip(m.b, ks):
             x1 = x1 + h * bi * k
+    elif isinstance(m, ExtrapolatedMethod):
+        x1, z = _euler_extrapolation(f, t, x0, zg, h, m.sequence, iterations)
     else:
         f0, z = f(t, x0, zg)
         x1 = x0 + h * f0
@@ -129,7 +179,11 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
         if nz else zg
     modes, counters, tlast = (_segment(rest, 0, nr), _segment(rest, nr, 2 * nr),
                               _segment(rest, 2 * nr, 3 * nr))
-    if nr:
+    if nr and cm.f_events is not None:
+        # relations re-read, clock ticks due and conditions that became true, with their
+        # actions (discrete updates at the sample instants that the step lands on)
+        Xn = cm.f_events(t + h, ca.vertcat(x1, rest), z1, p)
+    elif nr:
         d, _ = cm.f_dist(t + h, ca.vertcat(x1, rest), z1, p)
         le = ca.DM([1.0 if op in ("<=", "sign") else 0.0 for _, op in cm.relations])
         new = ca.vertcat(*[ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, 2 * le[k] - 1))
@@ -138,7 +192,8 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
         counters = counters + changed
         tlast = ca.vertcat(*[ca.if_else(changed[k], t + h, tlast[k]) for k in range(nr)])
         modes = new
-    Xn = ca.vertcat(x1, modes, counters, tlast)
+    if not (nr and cm.f_events is not None):
+        Xn = ca.vertcat(x1, modes, counters, tlast)
     y = cm.f_out(t + h, Xn, z1, p)
     step = ca.Function(f"step_{method}", [Xa, u, p, t], [ca.vertcat(Xn, z1), y],
                        ["x", "u", "p", "t"], ["x_next", "y"])

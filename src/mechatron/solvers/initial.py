@@ -20,15 +20,16 @@ __all__ = ["initialize", "initial_modes"]
 
 
 def initial_modes(cm: CompiledModel, t0: float, x: np.ndarray, z: np.ndarray,
-                  p: np.ndarray) -> np.ndarray:
+                  p: np.ndarray, counters: np.ndarray | None = None) -> np.ndarray:
     """Modes of the relations at the initial point (iterated for nested relations)."""
     nr = cm.nr
     if nr == 0:
         return np.zeros(0)
     modes = np.ones(nr)
     le = np.array([op in ("<=", "sign") for _, op in cm.relations])
+    counters = np.zeros(nr) if counters is None else counters
     for _ in range(4):
-        X = np.concatenate([x, modes, np.zeros(nr), np.full(nr, t0)])
+        X = np.concatenate([x, modes, counters, np.full(nr, t0)])
         d, d_dot = (np.array(v, dtype=float).ravel() for v in cm.f_dist(t0, X, z, p))
         # on the boundary, the direction of motion decides; at rest, the relation's op
         at_zero = np.where(d_dot > 0, True, np.where(d_dot < 0, False, le))
@@ -51,6 +52,18 @@ def initialize(cm: CompiledModel, p: np.ndarray, t0: float = 0.0):
         modes = initial_modes(cm, t0, x, z, p)
     nr = cm.nr
     X0 = np.concatenate([x, modes, np.zeros(nr), np.full(nr, t0)])
+    if cm.report.get("event_actions"):
+        # ticks due at t0 and their actions (the first sample of every block at offset 0),
+        # then the modes at the point after them
+        # a when condition that holds at t0 acts at t0 (a relay starts on above its
+        # on-point): its mode is taken as false before, so the check sees it rise
+        X0[[cm.nx + k for k in cm.report.get("when_relations", [])]] = -1.0
+        X0 = np.array(cm.f_events(t0, X0, z, p), dtype=float).ravel()
+        plain = np.array([op != "clock" for _, op in cm.relations])
+        X0[cm.nx + nr:cm.nx + 2 * nr][plain] = 0.0      # only ticks count at t0
+        X0[cm.nx + 2 * nr:][plain] = t0
+        counters = X0[cm.nx + nr:cm.nx + 2 * nr]
+        X0[cm.nx:cm.nx + nr] = initial_modes(cm, t0, X0[:cm.nx], z, p, counters)
     y = np.array(cm.f_out(t0, X0, z, p), dtype=float).ravel() if cm.targets else None
     for k, name in enumerate(cm.state_names):
         if cm.x_priority[k] in ("high", "low"):

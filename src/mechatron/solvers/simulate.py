@@ -35,8 +35,8 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     t_stop : float
         End time in s.
     solver : str
-        ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs, Rosenbrock for models with
-        events), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``, or a
+        ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs; for models with events rk45,
+        or Rosenbrock for DAEs), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``, or a
         fixed-step method: ``"euler"``, ``"heun"``, ``"rk4"``, ``"backward_euler"``,
         ``"trapezoidal"``.
     dt : float, optional
@@ -51,7 +51,9 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     iterations : int
         Newton iterations per step of the implicit fixed-step methods.
     max_step : float, optional
-        Largest step of the variable-step solvers.
+        Largest step of the variable-step solvers (for models with events, by default a
+        fiftieth of the simulated time, or half the shortest time scale a component
+        declares).
     """
     if inputs is not None:
         raise SimulationError("simulate(inputs=...): external inputs are not supported "
@@ -96,6 +98,11 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
             scales = scales[np.isfinite(scales) & (scales > 0)]
             if scales.size:
                 max_step = 0.5 * float(scales.min())
+        if max_step is None and cm.nr:
+            # an event indicator that depends on time directly (a sine through a
+            # quantizer) can cross and cross back within one long step of a model whose
+            # states barely move; Simulink's default bounds the step the same way
+            max_step = (float(grid[-1]) - t0) / 50
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
                                             atol=atol, max_step=max_step)
         Y = evaluate_outputs(cm, grid, X, Z, p)
@@ -107,6 +114,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                             rejected_steps=int(st.get("n_reject", st.get("netfails", 0))),
                             rhs_evals=int(st.get("n_rhs", st.get("nfevals", 0))),
                             jac_evals=int(st.get("n_jac", st.get("n_call_jacF", 0))))
+    _check_chattering(cm, Xf, stats.solver)
     stats.events = _events(cm, Xf)
     stats.wall_time = _time.perf_counter() - clock
     stats.compile_time = compile_time
@@ -126,6 +134,30 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
 def _stages(method: str) -> int:
     m = METHODS[method]
     return len(m.c) if hasattr(m, "c") else 2
+
+
+def _check_chattering(cm: CompiledModel, Xf: np.ndarray, solver: str) -> None:
+    """Raise if the transition marked a relation as chattering (see
+    :mod:`mechatron.compiler.events`): after its event it was driven straight back onto
+    its switching surface, so it would switch again at once, endlessly."""
+    from mechatron.compiler.events import CHATTER_FLAG
+    nx, nr = cm.nx, cm.nr
+    bad = [k for k in range(nr) if Xf[nx + nr + k] >= 0.5 * CHATTER_FLAG]
+    if not bad:
+        return
+    owners = []
+    for k in bad:
+        if cm.relations[k][0] not in owners:
+            owners.append(cm.relations[k][0])
+    k = bad[0]
+    t_ev = float(Xf[nx + 2 * nr + k])
+    count = int(round(Xf[nx + nr + k] % CHATTER_FLAG))
+    raise SimulationError(
+        f"model '{cm.name}': {solver}: chattering at t = {t_ev:.9g} s: events at "
+        f"'{', '.join(o or cm.name for o in owners)}' would repeat without end (after "
+        f"event {count} the switched dynamics drive the relation straight back across its "
+        "switching surface, a sliding mode). Add hysteresis (blocks.Relay), a dead zone, "
+        "or smooth the switching law.", path=owners[0] or cm.name, variables=owners)
 
 
 def _events(cm: CompiledModel, Xf: np.ndarray) -> dict[str, int]:

@@ -29,7 +29,7 @@ ROSENBROCK_MODES = ("shared-code bug (reported by h3): with CasADi's 'rosenbrock
 
 @pytest.mark.parametrize("solver", [
     "rk45",
-    pytest.param("auto", marks=pytest.mark.xfail(strict=True, reason=ROSENBROCK_MODES))])
+    "auto"])   # fixed by h4: 'auto' uses rk45 for ODE models with events
 def test_input_energy_equals_dissipated_plus_stored(solver):
     J1, J2, J3, k, D, ratio, eta = 0.01, 0.02, 0.05, 50.0, 0.05, 2.5, 0.85
     m = mt.System("train")
