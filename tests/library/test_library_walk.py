@@ -27,20 +27,7 @@ from mechatron.library import catalog
 
 #: "module.Class" -> reason. Only for classes owned by others; each is reported to the
 #: lead engineer.
-KNOWN_EXCEPTIONS: dict[str, str] = {
-    "mechatron.library.blocks.sources.FromData":
-        "docstring states no relation in code markup (e.g. ``y = interp(t; time, values)``); "
-        "owner h4 (blocks)",
-    "mechatron.library.blocks.logic.LookupTable1D":
-        "docstring states no relation in code markup (e.g. ``y = interp(u; breakpoints, "
-        "table)``); owner h4 (blocks)",
-    "mechatron.library.blocks.logic.LookupTable2D":
-        "docstring states no relation in code markup (e.g. ``y = interp2(u1, u2; ...)``); "
-        "owner h4 (blocks)",
-    "mechatron.library.multibody.parts.Weld":
-        "docstring states no relation in code markup (e.g. ``frame_b.x = frame_a.x``); "
-        "owner h5 (multibody)",
-}
+KNOWN_EXCEPTIONS: dict[str, str] = {}
 
 COMPONENTS = catalog.components()
 IMPORT_ERRORS = catalog.import_errors()

@@ -305,11 +305,6 @@ def test_mosfet_half_bridge_matches_exact_and_averaged_solution(high_side):
     assert mean == pytest.approx(DUTY * VDC / (RL + RON), rel=1e-4)
 
 
-@pytest.mark.xfail(reason="shared-code bug (reported by h2): an event's transition re-reads "
-                          "the other relations only one level deep; when the MOSFET turns "
-                          "off (level 1, driven by the PWM's relation) the freewheeling "
-                          "diode (level 2) stays off, the inductor current collapses "
-                          "through G_off and the diode never turns on", strict=False)
 def test_buck_converter_freewheeling_diode_takes_over_the_inductor_current():
     VIN, F, D = 24.0, 10e3, 0.3
     m = mt.System("buck")
@@ -326,10 +321,13 @@ def test_buck_converter_freewheeling_diode_takes_over_the_inductor_current():
     m.connect(r.n, ind.p)
     m.connect(ind.n, d.p, src.n, g.port)
     t_off = DELAY + D / F
+    eps = 1e-10
     res = mt.simulate(m, 3 / F, rtol=1e-9, atol=1e-12,
-                      t_out=np.array([0.0, t_off - 1e-7, t_off + 1e-7, t_off + 0.3 / F]))
-    # the inductor current is continuous across the turn-off, the diode conducts it and
-    # clamps the switch node one forward drop (plus R_on i) below ground
-    assert res["l.i"][2] == pytest.approx(res["l.i"][1], rel=1e-3)
+                      t_out=np.array([0.0, t_off - eps, t_off + eps, t_off + 0.3 / F]))
+    # the inductor current is continuous across the turn-off (it can change by at most
+    # 2 eps max|di/dt| = 2 eps VIN / L), the diode conducts it and clamps the switch node
+    # one forward drop (plus R_on i) below ground
+    assert res["l.i"][1] > 0.1
+    assert abs(res["l.i"][2] - res["l.i"][1]) <= 2 * eps * VIN / LL
     assert res["d.on"][3] == 1.0
     assert res["r.p.v"][3] == pytest.approx(-(0.7 + 0.01 * res["l.i"][3]), rel=1e-3)
