@@ -6,44 +6,14 @@ import pytest
 
 import mechatron as mt
 from mechatron.library import blocks
-from mechatron.library import electrical as el
-from mechatron.library import electromechanical as em
-from mechatron.library import rotational as rot
+from mechatron.models.dc_motor_pwm import pwm_motor
 
 V, R, L, K, J, B = 19.2, 7.1, 3.408e-4, 0.151, 4.8e-6, 1.236e-4
 F_PWM, DUTY = 10e3, 0.5
 
 
 def motor(averaged: bool) -> mt.System:
-    """The seed's DC motor behind a controlled voltage source, driven by a PWM of duty
-    DUTY (or by its average DUTY * V); ``charge`` integrates the armature current."""
-    m = mt.System("pwm_motor")
-    duty = m.add("duty", blocks.Constant(value=DUTY))
-    if averaged:
-        drive = m.add("avg", blocks.Gain(k=V))
-    else:
-        drive = m.add("pwm", blocks.PWM(Ts=1 / F_PWM, amplitude=V))
-    src = m.add("src", el.ControlledVoltageSource())
-    sensor = m.add("sensor", el.CurrentSensor())
-    r = m.add("r", el.Resistor(R=R))
-    ind = m.add("l", el.Inductor(L=L))
-    emf = m.add("emf", em.RotationalEMF(k=K))
-    j = m.add("j", rot.Inertia(J=J))
-    d = m.add("d", rot.RotationalDamper(D=B))
-    g = m.add("g", el.ElectricalReference())
-    f = m.add("f", rot.RotationalReference())
-    charge = m.add("charge", blocks.Integrator())
-    m.connect(duty.y, drive.u)
-    m.connect(drive.y, src.u)
-    m.connect(src.p, sensor.p)
-    m.connect(sensor.n, r.p)
-    m.connect(r.n, ind.p)
-    m.connect(ind.n, emf.p)
-    m.connect(emf.n, src.n, g.port)
-    m.connect(emf.A, j.port, d.A)
-    m.connect(emf.B, d.B, f.port)
-    m.connect(sensor.I, charge.u)
-    return m
+    return pwm_motor(averaged, V=V, R=R, L=L, k=K, J=J, B=B, duty=DUTY, f_pwm=F_PWM)
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ __all__ = ["register", "get", "list"]
 
 #: Modules of the package that register entries when imported.
 BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum",
-                   "motor_heating", "quarter_car", "ball_screw", "kinetic_mechanism",
+                   "motor_heating", "quarter_car", "ball_screw", "kinetic_mechanism", "dc_motor_pwm",
                    "solenoid", "hydraulic_cylinder",
                    "buck_converter", "hbridge_filter", "stepper",
                    "bldc", "servo_encoder", "geared_drive")
