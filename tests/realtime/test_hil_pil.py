@@ -2,6 +2,7 @@
 
 import shutil
 
+import numpy as np
 import pytest
 
 from mechatron.realtime.hil import qemu_available, run_hil
@@ -22,4 +23,6 @@ def test_pil_firmware_boots_and_closes_the_loop():
     # a closed loop: the speed left 0 towards the reference step at 0.05 s
     assert res.log["w"][-1] > 10.0
     assert s["rms_diff_percent"] < 2.0
+    # the generated controller on the Cortex-M3 (soft-float doubles) gives MIL's duty
+    np.testing.assert_allclose(res.log["duty"], res.mil["duty"], rtol=0, atol=1e-12)
     assert any("real time" in n for n in s["notes"])     # says how fast it really ran

@@ -154,8 +154,8 @@ def _read_log(path: Path) -> dict[str, np.ndarray]:
 def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
             rate: float = 10_000.0, loss: float = 0.0, transport: str = "udp",
             realtime: bool = True, wait: float = 0.8, seed: int = 1,
-            build_dir: str | os.PathLike | None = None, pil_timeout: float = 2.0
-            ) -> HILResult:
+            build_dir: str | os.PathLike | None = None, pil_timeout: float = 2.0,
+            lockstep: bool = False) -> HILResult:
     """Run one HIL experiment and compare it with MIL.
 
     Parameters
@@ -179,6 +179,10 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
         Fraction of the period the plant waits for a reply before holding the previous
         duty (SIL). PIL waits up to ``pil_timeout`` s per step instead (lockstep: QEMU
         cannot keep 10 kHz, so the run is slower than real time and says so).
+    lockstep : bool
+        SIL only: wait for every reply (up to ``pil_timeout`` s) instead of keeping real
+        time, as PIL always does. No step is then missed, so SIL must reproduce MIL to
+        rounding; timing figures are not those of a real-time run.
     """
     if mode not in ("sil", "pil"):
         raise SimulationError(f"hil: --mode must be 'sil' or 'pil', got {mode!r}.")
@@ -209,14 +213,14 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
     out = Path(build_dir)
     try:
         return _run(loop, name, mode, duration, rate, loss, transport, realtime, wait,
-                    seed, out, steps, pil_timeout)
+                    seed, out, steps, pil_timeout, lockstep or mode == "pil")
     finally:
         if tmp is not None:
             tmp.cleanup()
 
 
 def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed, out,
-         steps, pil_timeout) -> HILResult:
+         steps, pil_timeout, lockstep) -> HILResult:
     exes = build_host(loop, out)
     firmware = build_firmware(loop, out) if mode == "pil" else None
     log_path, stats_path, cstats_path = out / "log.bin", out / "stats.json", out / "ctrl.json"
@@ -226,8 +230,10 @@ def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed
                  "--log", str(log_path), "--stats", str(stats_path)]
     if realtime:
         plant_cmd.append("--rt")
+    if lockstep:
+        plant_cmd += ["--lockstep", repr(float(pil_timeout))]
     if mode == "pil":
-        plant_cmd += ["--lockstep", repr(float(pil_timeout)), "--hello-timeout", "20"]
+        plant_cmd += ["--hello-timeout", "20"]
     notes = []
     plant = ctrl = None
     qemu_log = out / "qemu.log"
@@ -252,7 +258,7 @@ def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed
                     "-kernel", str(firmware)]
             ctrl = subprocess.Popen(ccmd, stdin=subprocess.DEVNULL,
                                     stdout=open(qemu_log, "w"), stderr=subprocess.STDOUT)
-        budget = 60.0 + duration * (1.5 if mode == "sil" else 2000.0 * pil_timeout)
+        budget = 60.0 + duration * (2000.0 * pil_timeout if lockstep else 1.5)
         try:
             plant.wait(timeout=budget)
         except subprocess.TimeoutExpired:
@@ -275,13 +281,16 @@ def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed
     log = _read_log(log_path)
     mil = run_mil(loop, steps)
     timing = timing_stats(log, rate, runner["wall_time_s"])
+    if lockstep:      # no schedule to keep: a wake-up lateness has no meaning
+        timing.update(jitter_median_s=None, jitter_p99_s=None, jitter_max_s=None)
     if runner["steps"] < steps:
         notes.append(f"stopped after {runner['steps']} of {steps} steps")
-    if mode == "pil" or (timing["realtime_factor"] or 0) < 0.98:
+    if lockstep or (timing["realtime_factor"] or 0) < 0.98:
         notes.append(f"ran at {timing['realtime_factor']:.3g}x real time "
                      f"({runner['wall_time_s']:.3g} s wall for {steps / rate:g} s)"
                      + (": QEMU cannot keep the rate; the plant waited for each reply "
-                        "(lockstep)" if mode == "pil" else ""))
+                        "(lockstep)" if mode == "pil" else
+                        ": lockstep, the plant waited for each reply" if lockstep else ""))
     if not runner["realtime"] and realtime:
         notes.append("real-time scheduling (SCHED_FIFO) not permitted; ran in the default "
                      "class")

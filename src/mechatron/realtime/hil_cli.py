@@ -34,6 +34,9 @@ def add_hil_command(sub) -> None:
     p.add_argument("--transport", choices=("udp", "pty"), default="udp",
                    help="SIL bridge: UDP on loopback or a pseudo-terminal serial line "
                         "(default: %(default)s)")
+    p.add_argument("--lockstep", action="store_true",
+                   help="SIL: wait for every reply instead of keeping real time (no "
+                        "missed steps: SIL then reproduces MIL to rounding)")
     p.add_argument("--no-rt", action="store_true",
                    help="do not ask for real-time scheduling (SCHED_FIFO)")
     p.add_argument("--seed", type=int, default=1, help="seed of the loss injection")
@@ -48,7 +51,7 @@ def cmd_hil(args: argparse.Namespace) -> int:
     report = output_path(args.report, "--report", (".html", ".htm"))
     res = run_hil(args.name, mode=args.mode, duration=args.duration, rate=args.rate,
                   loss=args.loss, transport=args.transport, realtime=not args.no_rt,
-                  seed=args.seed)
+                  seed=args.seed, lockstep=args.lockstep)
     s = res.summary()
     if report is not None:
         from mechatron.realtime.report import write_report

@@ -14,15 +14,20 @@ for the separate plant and controller processes (SIL) or the firmware (PIL):
     ``[k dt, (k+1) dt]`` with the pin
     voltage set to the PWM average over that step (:func:`~mechatron.realtime.plant.pwm_average`).
 ``ctrl_step(xc, count, k, valid) -> (xc_next, out)``
-    The discrete controller, ``out = [duty, ref, y_meas, u]``.
+    The discrete controller, ``out = [duty, ref, y_meas, u]``: a diagram of signal
+    blocks (:func:`mechatron.realtime.controller.build_controller`: unit delays for the
+    speed window, Step blocks for the reference, ``DiscretePID`` with saturation and
+    clamping anti-windup), compiled, and stepped by the fixed-step function that
+    ``mechatron.codegen.generate_c`` emits as C for SIL and PIL (``count`` and ``valid``
+    are parameters of the model set before each call; the call ``k`` ends at the tick
+    ``k dt``).
 
 Timing of one step ``k`` (identical in MIL, SIL and PIL): the plant samples the encoder
 at ``t_k``, the controller turns that count into a duty ``d_k``, and the plant applies
 ``d_k`` over ``[t_k, t_k+1]``. In SIL/PIL a duty that has not arrived by the plant's
 reply deadline is replaced by the previous one (a *missed* step).
 
-The controller (written as a CasADi difference equation; ``mechatron.library.blocks``
-has no discrete PI yet)::
+The controller computes (see :mod:`mechatron.realtime.controller`)::
 
     y_meas = w_meas   (speed)  or  phi_meas = 2 pi count / (4 lines)   (position)
     w_meas = 2 pi (count_k - count_{k-M}) / (4 lines M dt)
@@ -46,7 +51,12 @@ import casadi as ca
 import numpy as np
 
 import mechatron as mt
+from mechatron.codegen.c.generator import prepare
+from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
+from mechatron.realtime.controller import (CONTROLLER_INPUTS, CONTROLLER_OUTPUTS,
+                                           CONTROLLER_SOLVER, CONTROLLER_T0,
+                                           build_controller)
 from mechatron.realtime.plant import PLANT_DEFAULTS, build_plant, pwm_average
 from mechatron.solvers.fixed import make_step
 from mechatron.solvers.initial import initialize
@@ -55,6 +65,8 @@ __all__ = ["Experiment", "EXPERIMENTS", "LoopFunctions", "build_loop", "run_mil"
            "MEAS_NAMES", "CTRL_OUT_NAMES", "window_samples"]
 
 MEAS_NAMES = ("count", "w", "phi", "v_c", "i")
+#: C prefix of the generated controller (``hilctrl.h``: ``hilctrl_step``, ...).
+CONTROLLER_NAME = "hilctrl"
 CTRL_OUT_NAMES = ("duty", "ref", "y_meas", "u")
 
 
@@ -120,18 +132,13 @@ class LoopFunctions:
     xc0: np.ndarray
     state_names: list[str] = field(default_factory=list)
     lines: int = PLANT_DEFAULTS["lines"]
+    controller: CompiledModel | None = None   # the compiled block diagram
+    ctrl_t0: float = 0.0                      # its start time, -dt
 
 
 def window_samples(exp: Experiment, dt: float) -> int:
     """Samples ``M`` of the speed window at step ``dt`` (at least 2)."""
     return max(2, int(round(exp.window_s / dt)))
-
-
-def _ref_expr(exp: Experiment, t):
-    r = ca.SX(0)
-    for t0, v in exp.reference:
-        r = ca.if_else(t >= t0 - 1e-12, v, r)
-    return r
 
 
 def build_loop(experiment: str | Experiment = "speed", *, rate: float = 10_000.0,
@@ -150,6 +157,12 @@ def build_loop(experiment: str | Experiment = "speed", *, rate: float = 10_000.0
     if not (exp.window_s > 0):
         raise SimulationError(f"hil experiment '{exp.name}': the speed window must be "
                               f"> 0 s, got {exp.window_s!r}.")
+    if not exp.reference:
+        raise SimulationError(f"hil experiment '{exp.name}': the reference has no step; "
+                              "give at least one (t_start, value).")
+    if exp.Kd and not exp.Kp:
+        raise SimulationError(f"hil experiment '{exp.name}': Kd = {exp.Kd!r} needs "
+                              "Kp != 0 (the rate feedback enters as e - (Kd/Kp) w_meas).")
     cm = mt.compile_model(build_plant(**plant_params))
     step = make_step(cm, method, dt)
     p0 = cm.parameter_vector()
@@ -174,35 +187,37 @@ def build_loop(experiment: str | Experiment = "speed", *, rate: float = 10_000.0
     plant_step = ca.Function("plant_step", [x, duty, k], [x_next],
                              ["x", "duty", "k"], ["x_next"])
 
-    M = window_samples(exp, dt)
-    xc = ca.SX.sym("xc", 1 + M)           # [integrator; counts k-1 ... k-M]
-    c_in = ca.SX.sym("count")
-    valid = ca.SX.sym("valid")
-    integ, hist = xc[0], xc[1:]
-    c_ext = hist[0] + (hist[0] - hist[M - 1]) / (M - 1)
-    c = ca.if_else(valid > 0.5, c_in, c_ext)
-    w_meas = 2 * math.pi * (c - hist[M - 1]) / (cpr * M * dt)
-    y_meas = w_meas if exp.quantity == "speed" else 2 * math.pi * c / cpr
-    ref = _ref_expr(exp, k * dt)
-    e = ref - y_meas
-    u = exp.Kp * e + integ - exp.Kd * w_meas
-    u_sat = ca.fmin(ca.fmax(u, -V_s), V_s)
-    windup = ca.logic_or(ca.logic_and(u > V_s, e > 0), ca.logic_and(u < -V_s, e < 0))
-    integ_next = ca.if_else(windup, integ, integ + exp.Ki * dt * e)
-    duty_out = 0.5 + u_sat / (2 * V_s)
-    xc_next = ca.vertcat(integ_next, c, hist[:M - 1])
-    out = ca.vertcat(duty_out, ref, y_meas, u)
-    ctrl_step = ca.Function("ctrl_step", [xc, c_in, k, valid], [xc_next, out],
-                            ["xc", "count", "k", "valid"], ["xc_next", "out"])
+    ctrl_cm = mt.compile_model(build_controller(exp, dt, lines=lines, V_s=V_s))
+    prep = prepare(ctrl_cm, solver=CONTROLLER_SOLVER, dt=dt, t0=CONTROLLER_T0 * dt,
+                   name=CONTROLLER_NAME)
+    ctrl_step = _controller_step(prep)
     x0 = np.concatenate([np.asarray(X0, float), np.asarray(z0, float)])
-    count0 = math.floor(x0[idx["encoder.phi"]] * cpr / (2 * math.pi))
-    xc0 = np.concatenate([[0.0], np.full(M, float(count0))])
+    xc0 = np.asarray(prep.x_start, dtype=float)
     return LoopFunctions(
         experiment=exp, dt=dt, f_pwm=f_pwm, method=method, plant_out=plant_out,
         plant_step=plant_step, ctrl_step=ctrl_step,
         plant_x0=ca.Function("plant_x0", [], [ca.DM(x0)], [], ["x0"]),
         ctrl_x0=ca.Function("ctrl_x0", [], [ca.DM(xc0)], [], ["xc0"]),
-        x0=x0, xc0=xc0, state_names=list(cm.state_names), lines=int(lines))
+        x0=x0, xc0=xc0, state_names=list(cm.state_names), lines=int(lines),
+        controller=ctrl_cm, ctrl_t0=prep.t0)
+
+
+def _controller_step(prep) -> ca.Function:
+    """``ctrl_step(xc, count, k, valid) -> (xc_next, [duty, ref, y_meas, u])``: call ``k``
+    of the controller model's fixed-step function (the function the C generator emits),
+    from ``t0 + k dt`` to ``t0 + (k+1) dt`` with ``t0 = -dt``, its inputs set to
+    ``count`` and ``valid`` and the other parameters at their values."""
+    cm = prep.cm
+    xc = ca.SX.sym("xc", prep.x_start.size)
+    count, k, valid = ca.SX.sym("count"), ca.SX.sym("k"), ca.SX.sym("valid")
+    p = ca.SX(ca.DM(prep.p))
+    for name, value in zip(CONTROLLER_INPUTS, (count, valid)):
+        p[cm.param_names.index(name)] = value
+    t = prep.t0 + prep.dt * k              # as the generated C: t0 + DT * k
+    xc_next, y = prep.step(xc, ca.SX(prep.step.size1_in(1), 1), p, t)
+    out = ca.vertcat(*[y[cm.names.index(n)] for n in CONTROLLER_OUTPUTS])
+    return ca.Function("ctrl_step", [xc, count, k, valid], [xc_next, out],
+                       ["xc", "count", "k", "valid"], ["xc_next", "out"])
 
 
 #: Columns of a MIL/SIL log, in order (the C runner writes the same).

@@ -60,7 +60,7 @@ int main(int argc, char **argv)
     sigaction(SIGTERM, &sa, NULL);
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
     if (mt_ctrl_init(&ctrl) != 0) {
-        fprintf(stderr, "mt_controller: controller state too large\n");
+        fprintf(stderr, "mt_controller: controller init failed\n");
         return 2;
     }
     if (udp_port > 0 ? mt_link_udp(&link, 0, udp_port) != 0 : mt_link_tty(&link, tty) != 0) {
@@ -98,11 +98,11 @@ int main(int argc, char **argv)
         if (!f) { fprintf(stderr, "mt_controller: cannot write %s\n", stats); return 1; }
         fprintf(f, "{\"samples\": %u, \"lost_samples\": %u, \"stale_samples\": %u, "
                    "\"steps\": %u, \"dropped_on_purpose\": %u, \"sent\": %u, "
-                   "\"bad_frames\": %u, \"max_ctrl_time_s\": %.9g, \"realtime\": %s, "
-                   "\"stopped\": %s}\n",
+                   "\"bad_frames\": %u, \"bad_inputs\": %u, \"max_ctrl_time_s\": %.9g, "
+                   "\"realtime\": %s, \"stopped\": %s}\n",
                 ctrl.samples, ctrl.lost_samples, ctrl.stale_samples, ctrl.steps,
-                link.dropped, link.sent, link.bad, max_exec, rt_ok ? "true" : "false",
-                stopped ? "true" : "false");
+                link.dropped, link.sent, link.bad, ctrl.bad_inputs, max_exec,
+                rt_ok ? "true" : "false", stopped ? "true" : "false");
         if (stats) fclose(f);
     }
     mt_link_close(&link);

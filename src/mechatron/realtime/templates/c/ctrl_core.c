@@ -1,40 +1,28 @@
 /* Controller core: see ctrl_core.h. */
 #include "ctrl_core.h"
 
-#include "ctrl_model.h"
-#include "mt_casadi.h"
-
 int mt_ctrl_init(mt_ctrl *c)
 {
-    casadi_real *res[1];
-    int i;
-    c->nxc = MT_DIM_OUT(ctrl_step, 0);
-    if (c->nxc > MT_CTRL_MAX_STATES || MT_DIM_OUT(ctrl_x0, 0) != c->nxc) return -1;
-    res[0] = c->xc;
-    MT_CALL(ctrl_x0, (const casadi_real **)0, res);
-    for (i = c->nxc; i < MT_CTRL_MAX_STATES; ++i) c->xc[i] = 0.0;
+    hilctrl_init(&c->model);
     c->expected = 0;
     c->started = 0;
-    c->samples = c->lost_samples = c->stale_samples = c->steps = 0;
-    c->last_duty = 0.5;
-    c->last_ref = 0.0;
+    c->samples = c->lost_samples = c->stale_samples = c->steps = c->bad_inputs = 0;
+    c->last_duty = hilctrl_get_duty_y(&c->model);
+    c->last_ref = hilctrl_get_ref_y(&c->model);
     return 0;
 }
 
+/* Step k of the plant: the model's inputs are set, its step counter is put on the plant's
+ * time base (its step k runs from t0 + k DT = (k-1) DT to k DT, and the sample tick at
+ * k DT reads the inputs), and one fixed step is taken. */
 static void run_step(mt_ctrl *c, double count, uint32_t k, int valid)
 {
-    double xn[MT_CTRL_MAX_STATES];
-    double out[4];
-    double kk = (double)k, vv = valid ? 1.0 : 0.0;
-    const casadi_real *arg[4];
-    casadi_real *res[2];
-    int i;
-    arg[0] = c->xc; arg[1] = &count; arg[2] = &kk; arg[3] = &vv;
-    res[0] = xn; res[1] = out;
-    MT_CALL(ctrl_step, arg, res);
-    for (i = 0; i < c->nxc; ++i) c->xc[i] = xn[i];
-    c->last_duty = out[0];
-    c->last_ref = out[1];
+    if (hilctrl_set_count_value(&c->model, count) != HILCTRL_OK) c->bad_inputs++;
+    if (hilctrl_set_valid_value(&c->model, valid ? 1.0 : 0.0) != HILCTRL_OK) c->bad_inputs++;
+    c->model.k = (unsigned long)k;
+    (void)hilctrl_step(&c->model);
+    c->last_duty = hilctrl_get_duty_y(&c->model);
+    c->last_ref = hilctrl_get_ref_y(&c->model);
     c->steps++;
 }
 

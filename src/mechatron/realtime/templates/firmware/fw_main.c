@@ -94,7 +94,7 @@ int main(void)
     NVIC_ISER0 = 1u << UART0_IRQ;
     mt_frame_parser_init(&fp);
     if (mt_ctrl_init(&ctrl) != 0) {
-        semihost(0x04, "{\"error\": \"controller state too large\"}\n");
+        semihost(0x04, "{\"error\": \"controller init failed\"}\n");
         semihost(0x18, (const void *)0x20026);
     }
     out.type = MT_HELLO; out.flags = 0; out.seq = 0; out.a = 0.0; out.b = 0.0;
