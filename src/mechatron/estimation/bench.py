@@ -31,6 +31,7 @@ import numpy as np
 
 import mechatron as mt
 from mechatron.estimation.data import Experiment
+from mechatron.models.dc_motor import SeedMotor
 
 __all__ = ["DCMotorRig", "VirtualBench", "TABLE_6_1", "FrictionCurve", "stribeck_torque"]
 
@@ -51,7 +52,7 @@ def stribeck_torque(w, T_brk, w_brk, T_C, B, np_=np):
             + T_C * np_.tanh(w / (w_brk / 10)) + B * w)
 
 
-class DCMotorRig(mt.Component):
+class DCMotorRig(SeedMotor):
     """Brush DC motor on a test rig, as ODEs.
 
     ``L di/dt = V - R i - k w``;  ``J dw/dt = (1 - locked) (k i - tau_f(w))``;
@@ -62,11 +63,6 @@ class DCMotorRig(mt.Component):
     """
 
     V = mt.Parameter("V", default=0.0, doc="Terminal voltage")
-    R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
-    L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
-    k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
-    J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
-    B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Viscous friction")
     T_brk = mt.Parameter("N*m", default=0.0118, min=0, doc="Breakaway friction torque")
     w_brk = mt.Parameter("rad/s", default=0.1, min=0, doc="Breakaway friction velocity")
     T_C = mt.Parameter("N*m", default=0.00854, min=0, doc="Coulomb friction torque")

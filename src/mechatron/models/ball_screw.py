@@ -20,6 +20,7 @@ from mechatron.library import electromechanical as em
 from mechatron.library import mechanisms as mech
 from mechatron.library import rotational as rot
 from mechatron.library import translational as tr
+from mechatron.models.dc_motor import SeedMotor
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
 
@@ -58,15 +59,10 @@ class BallScrewAcausal(mt.Component):
                 mt.connect(self.guide.B, self.position.B, self.bed.port)]
 
 
-class BallScrewEquation(mt.Component):
+class BallScrewEquation(SeedMotor):
     """The axis as the motor's two ODEs with the carriage reflected through the screw."""
 
     V = mt.Parameter("V", default=19.2, doc="Supply voltage")
-    R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
-    L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
-    k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
-    J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
-    B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Motor viscous friction")
     lead = mt.Parameter("m", default=5e-3, min=0, doc="Screw lead")
     eta = mt.Parameter("1", default=0.9, min=0, max=1, doc="Screw efficiency")
     M = mt.Parameter("kg", default=2.0, min=0, doc="Carriage mass")

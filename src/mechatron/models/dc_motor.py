@@ -38,15 +38,21 @@ class DCMotorAcausal(mt.Component):
                 mt.connect(self.emf.B, self.damper.B, self.fixed.port)]
 
 
-class DCMotorODE(mt.Component):
-    """DC motor as a user-written set of ODEs (the Simscape-language equivalent)."""
+class SeedMotor(mt.Component, partial=True):
+    """The seed DC motor's constants (table 6-1, calculated) as parameters, for the
+    equation models built on that motor to inherit."""
 
-    V = mt.Parameter("V", default=19.2, doc="Supply voltage")
     R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
     L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
     k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
     J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
     B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Viscous friction")
+
+
+class DCMotorODE(SeedMotor):
+    """DC motor as a user-written set of ODEs (the Simscape-language equivalent)."""
+
+    V = mt.Parameter("V", default=19.2, doc="Supply voltage")
     i = mt.Variable("A", start=0.0, doc="Armature current")
     w = mt.Variable("rad/s", start=0.0, doc="Rotor speed")
 

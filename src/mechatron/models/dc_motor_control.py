@@ -33,6 +33,7 @@ from __future__ import annotations
 import casadi as ca
 
 import mechatron as mt
+from mechatron.models.dc_motor import SeedMotor
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
 
@@ -47,14 +48,9 @@ def smooth_sat(x, a, eps_rel: float = 1e-3):
     return 0.5 * (ca.sqrt((x + a) ** 2 + eps ** 2) - ca.sqrt((x - a) ** 2 + eps ** 2))
 
 
-class _Drive(mt.Component, partial=True):
+class _Drive(SeedMotor, partial=True):
     """The motor and the current loop shared by both controllers."""
 
-    R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
-    L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
-    k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
-    J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
-    B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Viscous friction")
     V_max = mt.Parameter("V", default=24.0, min=0, doc="Supply voltage limit")
     I_max = mt.Parameter("A", default=3.0, min=0, doc="Current limit")
     Kp = mt.Parameter("A*s/rad", default=0.03, min=0, doc="Speed PI proportional gain")
@@ -107,16 +103,11 @@ class DCMotorPositionPI(_Drive):
                                          self.w_max)]
 
 
-class DCMotorSpeedPIVoltage(mt.Component):
+class DCMotorSpeedPIVoltage(SeedMotor):
     """The seed's structure: the speed PI drives the voltage directly (no current limit).
 
     ``V = sat(Kp e + Ki x, V_max)`` with ``e = w_set - w`` and anti-windup."""
 
-    R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
-    L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
-    k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
-    J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
-    B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Viscous friction")
     V_max = mt.Parameter("V", default=24.0, min=0, doc="Supply voltage limit")
     Kp = mt.Parameter("V*s/rad", default=0.05, min=0, doc="Speed PI proportional gain")
     Ki = mt.Parameter("V/rad", default=5.0, min=0, doc="Speed PI integral gain")

@@ -39,6 +39,7 @@ from mechatron.library import blocks
 from mechatron.library import electrical as el
 from mechatron.library import electromechanical as em
 from mechatron.library import rotational as rot
+from mechatron.models.dc_motor import SeedMotor
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
 
@@ -123,7 +124,7 @@ class HBridgeFilterAcausal(mt.Component):
                 mt.connect(self.emf.B, self.damper.B, self.housing.port)]
 
 
-class HBridgeFilterEquation(mt.Component):
+class HBridgeFilterEquation(SeedMotor):
     """The filter and the motor as three ODEs with the PWM written out."""
 
     V_pwm = mt.Parameter("V", default=5.0, doc="PWM high level")
@@ -132,11 +133,6 @@ class HBridgeFilterEquation(mt.Component):
     R_f = mt.Parameter("Ohm", default=7.5e3, min=0, doc="Filter resistance")
     C_f = mt.Parameter("F", default=40e-9, min=0, doc="Filter capacitance")
     V_bus = mt.Parameter("V", default=19.2, doc="H-bridge supply")
-    R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
-    L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
-    k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
-    J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
-    B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Viscous friction")
     v_f = mt.Variable("V", start=0.0, doc="Filtered voltage")
     i = mt.Variable("A", start=0.0, doc="Armature current")
     w = mt.Variable("rad/s", start=0.0, doc="Speed")
