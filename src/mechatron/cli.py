@@ -94,6 +94,8 @@ def _jsonable(obj: Any) -> Any:
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
     if isinstance(obj, (bool, np.bool_)):
         return bool(obj)
     if isinstance(obj, (int, np.integer)):
@@ -946,6 +948,7 @@ def build_parser() -> argparse.ArgumentParser:
 #: Helpers for the extension modules of :data:`EXTENSIONS`.
 emit = _emit
 emit_json = _emit_json
+jsonable = _jsonable
 table = _table
 add_json = _add_json
 add_set = _add_set

@@ -14,9 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
-from mechatron.cli import add_json, emit, emit_json, table
+from mechatron.cli import add_json, emit, emit_json, jsonable, table
 
 __all__ = ["add_commands", "Progress"]
 
@@ -81,14 +79,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     doc = res.to_dict()
     doc["setup_s"] = setup
     doc["config"] = str(args.config)
-    files = []
-    if out is not None:
-        files.append(res.plot_fit(out / "estimate_fit.png"))
-        files.append(res.plot_trajectory(out / "estimate_trajectory.png"))
-        path = out / "estimate.json"
-        path.write_text(json.dumps(_plain(doc), indent=2))
-        files.append(path)
-        doc["files"] = [str(f) for f in files]
+    files = _save(out, doc, {"estimate_fit.png": res.plot_fit,
+                             "estimate_trajectory.png": res.plot_trajectory}, "estimate")
     if args.json:
         emit_json(doc)
         return 0
@@ -119,18 +111,17 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _plain(obj):
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
-        return float(obj) if np.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    return obj
+def _save(out: Path | None, doc: dict, plots, name: str) -> list[Path]:
+    """Write the plots (callables taking a path, by file name) and ``doc`` as
+    ``name.json`` into ``out``; record the files in ``doc``. Nothing without ``out``."""
+    if out is None:
+        return []
+    files = [plot(out / file) for file, plot in plots.items()]
+    path = out / f"{name}.json"
+    path.write_text(json.dumps(jsonable(doc), indent=2))
+    files.append(path)
+    doc["files"] = [str(f) for f in files]
+    return files
 
 
 # ------------------------------------------------------------------------- sensitivity
@@ -151,14 +142,8 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
                           progress=lambda done, tot: bar.update(done, "simulations"))
     bar.close()
     doc = res.to_dict()
-    files = []
-    if out is not None:
-        files = [res.plot_scatter(out / "sensitivity_scatter.png"),
-                 res.plot_tornado(out / "sensitivity_tornado.png")]
-        path = out / "sensitivity.json"
-        path.write_text(json.dumps(_plain(doc), indent=2))
-        files.append(path)
-        doc["files"] = [str(f) for f in files]
+    files = _save(out, doc, {"sensitivity_scatter.png": res.plot_scatter,
+                             "sensitivity_tornado.png": res.plot_tornado}, "sensitivity")
     if args.json:
         emit_json(doc)
         return 0
@@ -203,13 +188,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     doc["requirements"] = [dict(r, start=b["value"], start_met=b["met"])
                            for r, b in zip(after["rows"], before["rows"])]
     doc["all_met"] = after["all_met"]
-    files = []
-    if out is not None:
-        files = [res.plot(out / "optimize_response.png")]
-        path = out / "optimize.json"
-        path.write_text(json.dumps(_plain(doc), indent=2))
-        files.append(path)
-        doc["files"] = [str(f) for f in files]
+    files = _save(out, doc, {"optimize_response.png": res.plot}, "optimize")
     if args.json:
         emit_json(doc)
         return 0
