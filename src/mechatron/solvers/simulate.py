@@ -14,11 +14,12 @@ from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.fixed import METHODS, integrate_fixed
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.logging import evaluate_outputs
+from mechatron.solvers.native import integrate_native
 from mechatron.solvers.variable import PLUGINS, integrate_variable
 
 __all__ = ["simulate", "SOLVERS"]
 
-SOLVERS = ("auto",) + tuple(PLUGINS) + tuple(METHODS)
+SOLVERS = ("auto",) + tuple(PLUGINS) + ("rodas4",) + tuple(METHODS)
 DEFAULT_POINTS = 1001
 
 
@@ -36,9 +37,11 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         End time in s.
     solver : str
         ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs; for models with events rk45,
-        or Rosenbrock for DAEs), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``, or a
-        fixed-step method: ``"euler"``, ``"heun"``, ``"rk4"``, ``"backward_euler"``,
-        ``"trapezoidal"``.
+        or Rosenbrock for DAEs), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``,
+        ``"rodas4"`` (the model and a Rosenbrock integrator compiled to one C library:
+        the fastest for small ODE models without events, see
+        :mod:`mechatron.solvers.native`), or a fixed-step method: ``"euler"``,
+        ``"heun"``, ``"rk4"``, ``"backward_euler"``, ``"trapezoidal"``, ``"ode14x"``.
     dt : float, optional
         Step size of a fixed-step solver (required for those).
     params : dict, optional
@@ -87,11 +90,18 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
             t = t_req
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
                             rhs_evals=n * _stages(solver), jac_evals=0)
+    elif solver == "rodas4":
+        grid = _grid(cm, t0, t_stop, t_out)
+        Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
+                                     max_step=max_step)
+        t = grid
+        if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
+            t, Y = t[1:], Y[:, 1:]
+        stats = SolverStats(solver="rodas4", steps=st["n_steps"],
+                            rejected_steps=st["n_reject"], rhs_evals=st["n_rhs"],
+                            jac_evals=st["n_jac"])
     else:
-        grid = (np.linspace(t0, t_stop, DEFAULT_POINTS) if t_out is None
-                else np.asarray(t_out, dtype=float))
-        if grid[0] != t0:
-            grid = np.concatenate([[t0], grid])
+        grid = _grid(cm, t0, t_stop, t_out)
         plugin = solver
         if max_step is None and cm.f_scales is not None and cm.f_scales.size1_out(0):
             scales = np.array(cm.f_scales(p), dtype=float).ravel()
@@ -129,6 +139,21 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     res.initialization = init_report
     res.event_times = _event_times(cm, Xf)
     return res
+
+
+def _grid(cm: CompiledModel, t0: float, t_stop: float, t_out) -> np.ndarray:
+    """The output grid of a variable-step run: ``t_out`` (checked) or 1001 points, always
+    starting at ``t0``."""
+    if t_out is None:
+        return np.linspace(t0, t_stop, DEFAULT_POINTS)
+    grid = np.asarray(t_out, dtype=float).ravel()
+    if grid.size == 0 or not np.all(np.isfinite(grid)) or np.any(np.diff(grid) <= 0) \
+            or grid[0] < t0:
+        shown = ", ".join(f"{v:g}" for v in grid[:4]) + (" ..." if grid.size > 4 else "")
+        raise SimulationError(f"model '{cm.name}': t_out must be finite, strictly "
+                              f"increasing times from t0 = {t0:g} s on; got [{shown}].",
+                              path=cm.name)
+    return grid if grid[0] == t0 else np.concatenate([[t0], grid])
 
 
 def _stages(method: str) -> int:

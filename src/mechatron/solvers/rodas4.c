@@ -1,0 +1,364 @@
+/* Rodas4: a variable-step, L-stable Rosenbrock method of order 4 with an embedded order-3
+ * error estimate (Hairer & Wanner, Solving ODEs II, section IV.7), for x' = f(t, x).
+ *
+ * This file is appended to the C that CasADi generates for one model:
+ *   mt_f(t, x, p)   -> f             the state derivative
+ *   mt_jac(t, x, p) -> J, f_t        df/dx (dense, column-major) and df/dt
+ *   mt_out(t, x, p) -> y             every logged variable
+ * and to the sizes MT_NX, MT_NY.  One call integrates from tout[0] to tout[nout - 1] and
+ * writes y at every output time (cubic Hermite interpolation of x between steps, exact
+ * at the steps), so the whole run is a single native call.
+ *
+ * One step of size h from (t0, x0), with W = I / (h gamma) - J(t0, x0):
+ *   W k_i = f(t0 + alpha_i h, x0 + sum_j a_ij k_j) + sum_j (c_ij / h) k_j + h g_i f_t
+ *   x1 = x0 + sum_j m_j k_j,   local error estimate = k_6 (the method is stiffly accurate)
+ * The step size follows the usual controller h_new = h * clamp(0.9 err^(-1/4), 0.2, 6)
+ * with err the RMS norm of k_6 weighted by atol + rtol max(|x0|, |x1|).
+ */
+
+#include <math.h>
+#include <stdlib.h>
+
+#define MT_STAGES 6
+
+static const double mt_gamma = 0.25;
+static const double mt_alpha[MT_STAGES] = {0.0, 0.386, 0.21, 0.63, 1.0, 1.0};
+static const double mt_g[MT_STAGES] = {0.25, -0.1043, 0.1035, -0.0362, 0.0, 0.0};
+/* strictly lower triangular A and C, row by row: (2,1), (3,1), (3,2), (4,1), ... */
+static const double mt_a[15] = {
+    1.544,
+    0.9466785280815826, 0.2557011698983284,
+    3.314825187068521, 2.896124015972201, 0.9986419139977817,
+    1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950,
+    1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950, 1.0};
+static const double mt_c[15] = {
+    -5.6688,
+    -2.430093356833875, -0.2063599157091915,
+    -0.1073529058151375, -9.594562251023355, -20.47028614809616,
+    7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160,
+    8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136,
+    -6.058818238834054};
+static const double mt_m[MT_STAGES] = {
+    1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950, 1.0, 1.0};
+
+enum {
+    MT_OK = 0, MT_MAX_STEPS = -1, MT_STEP_TOO_SMALL = -2, MT_NOT_FINITE = -3,
+    MT_SINGULAR = -4, MT_NO_MEMORY = -5
+};
+
+/* One evaluation context per generated function: its work arrays. */
+typedef struct {
+    const casadi_real *arg[8];
+    casadi_real *res[8];
+    casadi_int *iw;
+    casadi_real *w;
+} mt_ctx;
+
+static int mt_ctx_init(mt_ctx *c, int (*work)(casadi_int *, casadi_int *, casadi_int *,
+                                             casadi_int *)) {
+    casadi_int n_arg, n_res, n_iw, n_w;
+    work(&n_arg, &n_res, &n_iw, &n_w);
+    if (n_arg > 8 || n_res > 8) return MT_NO_MEMORY;
+    c->iw = (casadi_int *)malloc(sizeof(casadi_int) * (size_t)(n_iw > 0 ? n_iw : 1));
+    c->w = (casadi_real *)malloc(sizeof(casadi_real) * (size_t)(n_w > 0 ? n_w : 1));
+    return (c->iw && c->w) ? MT_OK : MT_NO_MEMORY;
+}
+
+static void mt_ctx_free(mt_ctx *c) {
+    free(c->iw);
+    free(c->w);
+}
+
+static int mt_all_finite(const double *v, int n) {
+    int i;
+    for (i = 0; i < n; ++i)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
+/* LU factorization with partial pivoting of the n x n column-major matrix a, in place. */
+static int mt_lu(double *a, int *piv, int n) {
+    int i, j, k, q;
+    for (k = 0; k < n; ++k) {
+        double big = fabs(a[k + k * n]);
+        q = k;
+        for (i = k + 1; i < n; ++i)
+            if (fabs(a[i + k * n]) > big) {
+                big = fabs(a[i + k * n]);
+                q = i;
+            }
+        piv[k] = q;
+        if (big == 0.0 || !isfinite(big)) return MT_SINGULAR;
+        if (q != k)
+            for (j = 0; j < n; ++j) {
+                double tmp = a[k + j * n];
+                a[k + j * n] = a[q + j * n];
+                a[q + j * n] = tmp;
+            }
+        for (i = k + 1; i < n; ++i) a[i + k * n] /= a[k + k * n];
+        for (j = k + 1; j < n; ++j) {
+            double akj = a[k + j * n];
+            if (akj != 0.0)
+                for (i = k + 1; i < n; ++i) a[i + j * n] -= a[i + k * n] * akj;
+        }
+    }
+    return MT_OK;
+}
+
+static void mt_lu_solve(const double *a, const int *piv, double *b, int n) {
+    int i, j;
+    for (i = 0; i < n; ++i) {
+        double tmp = b[piv[i]];
+        b[piv[i]] = b[i];
+        b[i] = tmp;
+    }
+    for (j = 0; j < n; ++j)
+        for (i = j + 1; i < n; ++i) b[i] -= a[i + j * n] * b[j];
+    for (j = n - 1; j >= 0; --j) {
+        b[j] /= a[j + j * n];
+        for (i = 0; i < j; ++i) b[i] -= a[i + j * n] * b[j];
+    }
+}
+
+/* Weighted RMS norm of v with scale atol + rtol max(|x0|, |x1|). */
+static double mt_norm(const double *v, const double *x0, const double *x1, int n,
+                      double rtol, double atol) {
+    double s = 0.0;
+    int i;
+    if (n == 0) return 0.0;
+    for (i = 0; i < n; ++i) {
+        double ref = fabs(x0[i]);
+        double sc, r;
+        if (x1 && fabs(x1[i]) > ref) ref = fabs(x1[i]);
+        sc = atol + rtol * ref;
+        r = v[i] / sc;
+        s += r * r;
+    }
+    return sqrt(s / n);
+}
+
+/* Integrate; see the top of the file.  info (8 entries) receives the accepted steps,
+ * rejected steps, f evaluations, Jacobian evaluations, LU factorizations, the time
+ * reached, the last step size and the number of output points written.  With fixed_h > 0
+ * every step has that size and is accepted (for convergence-order tests).  Returns MT_OK
+ * or a negative code. */
+int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
+              double rtol, double atol, double hmax, double h_init, long max_steps,
+              double fixed_h, double *y, double *xf, double *info) {
+    const int n = MT_NX;
+    const double eps = 2.220446049250313e-16;
+    double t, h, tend, fac, err, h_last = 0.0;
+    long k_out = 0, steps = 0, rejected = 0, nfev = 0, njev = 0, nlu = 0, it;
+    int i, j, s, status = MT_OK, reject_run = 0;
+    double *mem, *x, *x1, *f0, *f1, *fs, *ys, *jac, *ft, *w, *ks;
+    int *piv;
+    mt_ctx cf, cj, co;
+    size_t nn = (size_t)(n > 0 ? n : 1);
+
+    if (nout < 1) return MT_OK;
+    if (mt_ctx_init(&cf, mt_f_work) || mt_ctx_init(&cj, mt_jac_work) ||
+        mt_ctx_init(&co, mt_out_work))
+        return MT_NO_MEMORY;
+    mem = (double *)malloc(sizeof(double) * (8 * nn + 2 * nn * nn + MT_STAGES * nn));
+    piv = (int *)malloc(sizeof(int) * nn);
+    if (!mem || !piv) {
+        free(mem);
+        free(piv);
+        return MT_NO_MEMORY;
+    }
+    x = mem;
+    x1 = x + nn;
+    f0 = x1 + nn;
+    f1 = f0 + nn;
+    fs = f1 + nn;
+    ys = fs + nn;
+    ft = ys + nn;
+    jac = ft + 2 * nn;
+    w = jac + nn * nn;
+    ks = w + nn * nn;
+
+    t = tout[0];
+    tend = tout[nout - 1];
+    for (i = 0; i < n; ++i) x[i] = x0[i];
+
+#define MT_F(tt, xx, out)                                                       \
+    do {                                                                        \
+        casadi_real t_arg = (tt);                                               \
+        cf.arg[0] = &t_arg; cf.arg[1] = (xx); cf.arg[2] = p; cf.res[0] = (out); \
+        mt_f(cf.arg, cf.res, cf.iw, cf.w, 0);                                   \
+        ++nfev;                                                                 \
+    } while (0)
+#define MT_OUT(tt, xx, k)                                                       \
+    do {                                                                        \
+        casadi_real t_arg = (tt);                                               \
+        co.arg[0] = &t_arg; co.arg[1] = (xx); co.arg[2] = p;                    \
+        co.res[0] = y + (size_t)(k) * MT_NY;                                    \
+        mt_out(co.arg, co.res, co.iw, co.w, 0);                                 \
+    } while (0)
+
+    MT_OUT(t, x, 0);
+    k_out = 1;
+    MT_F(t, x, f0);
+    if (!mt_all_finite(f0, n)) {
+        status = MT_NOT_FINITE;
+        goto done;
+    }
+
+    /* initial step: Hairer & Wanner's estimate from |x| and |f| and one Euler step */
+    if (fixed_h > 0.0) {
+        h = fixed_h;
+    } else if (h_init > 0.0) {
+        h = h_init;
+    } else {
+        double d0 = mt_norm(x, x, 0, n, rtol, atol), d1 = mt_norm(f0, x, 0, n, rtol, atol);
+        double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1, d2, h1;
+        if (h0 > tend - t) h0 = tend - t;
+        for (i = 0; i < n; ++i) x1[i] = x[i] + h0 * f0[i];
+        MT_F(t + h0, x1, f1);
+        for (i = 0; i < n; ++i) fs[i] = (f1[i] - f0[i]) / h0;
+        d2 = mt_norm(fs, x, 0, n, rtol, atol);
+        d2 = d1 > d2 ? d1 : d2;
+        h1 = d2 <= 1e-15 ? (h0 * 1e-3 > 1e-6 ? h0 * 1e-3 : 1e-6) : pow(0.01 / d2, 0.2);
+        h = 100.0 * h0 < h1 ? 100.0 * h0 : h1;
+    }
+    if (hmax > 0.0 && h > hmax) h = hmax;
+
+    while (t < tend) {
+        int last = 0;
+        double hg;
+        if (steps + rejected >= max_steps) {
+            status = MT_MAX_STEPS;
+            goto done;
+        }
+        if (hmax > 0.0 && h > hmax) h = hmax;
+        if (t + 1.0001 * h >= tend) {   /* no sliver of a step left at the end */
+            h = tend - t;
+            last = 1;
+        }
+        if (h <= 16.0 * eps * fabs(t) || h <= 0.0) {
+            status = MT_STEP_TOO_SMALL;
+            goto done;
+        }
+        cj.arg[0] = &t;
+        cj.arg[1] = x;
+        cj.arg[2] = p;
+        cj.res[0] = jac;
+        cj.res[1] = ft;
+        mt_jac(cj.arg, cj.res, cj.iw, cj.w, 0);
+        ++njev;
+        hg = 1.0 / (h * mt_gamma);
+        for (j = 0; j < n * n; ++j) w[j] = -jac[j];
+        for (i = 0; i < n; ++i) w[i + i * n] += hg;
+        ++nlu;
+        if (mt_lu(w, piv, n) != MT_OK) {
+            h *= 0.25;
+            ++rejected;
+            if (++reject_run > 20) {
+                status = MT_SINGULAR;
+                goto done;
+            }
+            continue;
+        }
+        for (s = 0; s < MT_STAGES; ++s) {
+            double *ki = ks + (size_t)s * nn;
+            const double *fi = f0;
+            if (s > 0) {
+                const double *as = mt_a + s * (s - 1) / 2;
+                for (i = 0; i < n; ++i) ys[i] = x[i];
+                for (j = 0; j < s; ++j)
+                    if (as[j] != 0.0)
+                        for (i = 0; i < n; ++i) ys[i] += as[j] * ks[(size_t)j * nn + i];
+                MT_F(t + mt_alpha[s] * h, ys, fs);
+                fi = fs;
+            }
+            for (i = 0; i < n; ++i) ki[i] = fi[i] + h * mt_g[s] * ft[i];
+            if (s > 0) {
+                const double *cs = mt_c + s * (s - 1) / 2;
+                for (j = 0; j < s; ++j) {
+                    double cj_h = cs[j] / h;
+                    for (i = 0; i < n; ++i) ki[i] += cj_h * ks[(size_t)j * nn + i];
+                }
+            }
+            mt_lu_solve(w, piv, ki, n);
+        }
+        for (i = 0; i < n; ++i) {
+            double v = x[i];
+            for (s = 0; s < MT_STAGES; ++s) v += mt_m[s] * ks[(size_t)s * nn + i];
+            x1[i] = v;
+        }
+        err = mt_norm(ks + (size_t)(MT_STAGES - 1) * nn, x, x1, n, rtol, atol);
+        if (!isfinite(err) || !mt_all_finite(x1, n)) {
+            if (fixed_h > 0.0) {
+                status = MT_NOT_FINITE;
+                goto done;
+            }
+            h *= 0.25;
+            ++rejected;
+            if (++reject_run > 50) {
+                status = MT_NOT_FINITE;
+                goto done;
+            }
+            continue;
+        }
+        fac = err > 0.0 ? 0.9 * pow(err, -0.25) : 6.0;
+        if (fac > 6.0) fac = 6.0;
+        if (fac < 0.2) fac = 0.2;
+        if (err <= 1.0 || fixed_h > 0.0) {
+            double t1 = last ? tend : t + h;
+            MT_F(t1, x1, f1);
+            if (!mt_all_finite(f1, n)) {
+                status = MT_NOT_FINITE;
+                t = t1;
+                goto done;
+            }
+            /* outputs inside (t, t1]: cubic Hermite between (x, f0) and (x1, f1) */
+            while (k_out < nout && tout[k_out] <= t1) {
+                double th = (tout[k_out] - t) / (t1 - t), th2 = th * th, th3 = th2 * th;
+                double a0 = 2 * th3 - 3 * th2 + 1, b0 = (th3 - 2 * th2 + th) * (t1 - t);
+                double a1 = -2 * th3 + 3 * th2, b1 = (th3 - th2) * (t1 - t);
+                for (i = 0; i < n; ++i) ys[i] = a0 * x[i] + b0 * f0[i] + a1 * x1[i] + b1 * f1[i];
+                MT_OUT(tout[k_out], ys, k_out);
+                ++k_out;
+            }
+            h_last = t1 - t;
+            t = t1;
+            for (i = 0; i < n; ++i) {
+                x[i] = x1[i];
+                f0[i] = f1[i];
+            }
+            ++steps;
+            if (fixed_h > 0.0) {
+                h = fixed_h;
+            } else {
+                if (reject_run && fac > 1.0) fac = 1.0;
+                h *= fac;
+            }
+            reject_run = 0;
+        } else {
+            ++rejected;
+            ++reject_run;
+            h *= fac;
+        }
+    }
+    for (it = k_out; it < nout; ++it) MT_OUT(tout[it], x, it);   /* tout beyond tend: none */
+    k_out = nout;
+
+done:
+    for (i = 0; i < n; ++i) xf[i] = x[i];
+    info[0] = (double)steps;
+    info[1] = (double)rejected;
+    info[2] = (double)nfev;
+    info[3] = (double)njev;
+    info[4] = (double)nlu;
+    info[5] = t;
+    info[6] = h_last;
+    info[7] = (double)k_out;
+    free(mem);
+    free(piv);
+    mt_ctx_free(&cf);
+    mt_ctx_free(&cj);
+    mt_ctx_free(&co);
+    return status;
+#undef MT_F
+#undef MT_OUT
+}
