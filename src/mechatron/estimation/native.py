@@ -13,29 +13,17 @@ from __future__ import annotations
 
 import hashlib
 import os
-import shutil
 import subprocess
 import tempfile
 from pathlib import Path
 
 import casadi as ca
 
+from mechatron.solvers.native import cache_dir, compiler
+
 __all__ = ["native", "compiler", "cache_dir"]
 
 FLAGS = ("-O1", "-fPIC", "-shared")
-
-
-def compiler() -> str | None:
-    """The C compiler used (``$CC``, ``cc`` or ``gcc``), or None."""
-    cc = os.environ.get("CC")
-    if cc and shutil.which(cc):
-        return shutil.which(cc)
-    return shutil.which("cc") or shutil.which("gcc")
-
-
-def cache_dir() -> Path:
-    root = os.environ.get("MECHATRON_CACHE")
-    return Path(root) if root else Path.home() / ".cache" / "mechatron"
 
 
 def native(fn: ca.Function) -> ca.Function:
