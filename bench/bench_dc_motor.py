@@ -2,7 +2,10 @@
 
 The model is the database entry ``dc_motor`` (acausal variant), compiled once. Mechatron's
 figure is the wall time of ``mt.simulate`` on the compiled model: the first call (which
-builds the CasADi/CVODES integrator) and the median of the following calls. The SciPy
+builds the CasADi/CVODES integrator) and the median of the following calls; for two
+solvers: ``"cvodes"`` (SUNDIALS through CasADi, the default for ODEs) and ``"rodas4"``
+(model and Rosenbrock integrator compiled to one C library; its first call in a fresh
+cache folder includes the C compiler run, reported as ``build_s``). The SciPy
 baselines integrate the same ODE
 
     L di/dt = V - R i - k w,      J dw/dt = k i - B w
@@ -82,6 +85,36 @@ def _integrator_only(cm, t_out, n: int) -> dict | None:
     return summary(times)
 
 
+def _rodas4_runs(cm, t_out, n: int) -> dict:
+    """``mt.simulate(solver="rodas4")``: the C build in an empty cache folder, then the
+    median of repeated calls (the library loaded)."""
+    import os
+    import tempfile
+
+    def sim():
+        return mt.simulate(cm, T_STOP, solver="rodas4", rtol=RTOL, atol=ATOL, t_out=t_out)
+
+    saved = os.environ.get("MECHATRON_CACHE")
+    with tempfile.TemporaryDirectory() as tmp:
+        os.environ["MECHATRON_CACHE"] = tmp
+        cm._cache.pop("native_rodas4", None)
+        try:
+            res, build = clock(sim)
+        finally:
+            if saved is None:
+                os.environ.pop("MECHATRON_CACHE", None)
+            else:
+                os.environ["MECHATRON_CACHE"] = saved
+        res, times = repeat(sim, max(n, 25))
+    st = res.stats
+    log(f"dc_motor mechatron rodas4: build {build * 1e3:.0f} ms, "
+        f"median {summary(times)['median_s'] * 1e6:.0f} us")
+    return {"build_s": build, "simulate": summary(times), "result": res,
+            "stats": {"solver": st.solver, "steps": st.steps,
+                      "rejected_steps": st.rejected_steps, "rhs_evals": st.rhs_evals,
+                      "jac_evals": st.jac_evals}}
+
+
 def run(quick: bool = False) -> dict:
     """DC motor: Mechatron simulate vs SciPy solve_ivp (LSODA, BDF), same ODE, same rtol."""
     n_rep = 5 if quick else 15
@@ -116,12 +149,15 @@ def run(quick: bool = False) -> dict:
     _, t_prof, where = profiled(sim)
     alternative = logging_alternative(cm, res, t_out)
 
+    rodas = _rodas4_runs(cm, t_out, n_rep)
+    r_res = rodas.pop("result")
     scipy_res = _scipy_runs(P, t_out, n_rep)
 
     def agreement(w, i):
         return {"final_w": w, "final_i": i, "rel_err_w": abs(w - w_inf) / w_inf,
                 "rel_err_i": abs(i - i_inf) / i_inf}
 
+    rodas.update(agreement(float(r_res[paths["w"]][-1]), float(r_res[paths["i"]][-1])))
     baselines = {}
     for name, r in scipy_res.items():
         if "error" in r:
@@ -132,6 +168,8 @@ def run(quick: bool = False) -> dict:
             "ratio_scipy_over_mechatron": ratio(r["time"]["median_s"], mech["median_s"]),
             "ratio_scipy_over_mechatron_integrator_only":
                 ratio(r["time"]["median_s"], (integ or {}).get("median_s")),
+            "ratio_scipy_over_mechatron_rodas4":
+                ratio(r["time"]["median_s"], rodas["simulate"]["median_s"]),
             "counts": {"nfev": r["nfev"], "njev": r["njev"], "nlu": r["nlu"]},
             **agreement(r["final_w"], r["final_i"]),
         }
@@ -157,9 +195,11 @@ def run(quick: bool = False) -> dict:
                       "jac_evals": stats.jac_evals, "wall_time_s": stats.wall_time},
             **agreement(w_end, i_end),
         },
+        "mechatron_rodas4": rodas,
         "scipy": baselines,
         "notes": ["ratio = SciPy median time / Mechatron median simulate time (first call "
-                  "excluded); > 1 means Mechatron is faster.",
+                  "excluded); > 1 means Mechatron is faster. ratio_..._rodas4: the same "
+                  "with solver='rodas4'.",
                   "integrator_only: mechatron.solvers.variable.integrate_variable alone (the "
                   "CVODES run and the conversion of its states to NumPy), without "
                   "initialization and without evaluating the logged variables.",
