@@ -176,6 +176,53 @@ def _parse_sets(items: Sequence[str] | None, entry) -> dict[str, float | str]:
     return params
 
 
+def _parse_inputs(items: Sequence[str] | None) -> dict[str, object]:
+    """``--input U=VALUE`` (a number in SI or a quantity, constant) or ``--input
+    U=FILE.csv`` (a table: a header row with a column ``t`` in s and one value column, or
+    a column named ``U`` among several): the ``inputs`` of :func:`mechatron.simulate`."""
+    inputs: dict[str, object] = {}
+    for item in items or ():
+        key, sep, value = item.partition("=")
+        key, value = key.strip(), value.strip()
+        if not sep or not key or not value:
+            raise CommandError(f"--input {item!r}: expected NAME=VALUE or NAME=FILE.csv, "
+                               "e.g. --input u=3.5 or --input u=drive.csv.")
+        if key in inputs:
+            raise CommandError(f"--input {key}: given twice; give each input once.")
+        if value.lower().endswith(".csv"):
+            inputs[key] = _input_table(key, Path(value))
+        else:
+            try:
+                inputs[key] = float(value)
+            except ValueError:
+                inputs[key] = value          # a quantity string, checked by simulate
+            else:
+                if not math.isfinite(inputs[key]):
+                    raise CommandError(f"--input {key}: expected a finite value, got "
+                                       f"{value!r}.")
+    return inputs
+
+
+def _input_table(key: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    if not path.is_file():
+        raise CommandError(f"--input {key}={path}: no such file. Give a CSV file with a "
+                           f"header row 't,{key}'.")
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
+    except ValueError as exc:
+        raise CommandError(f"--input {key}={path}: cannot read it as CSV of numbers "
+                           f"({exc}). Expected a header row 't,{key}' and rows of "
+                           "numbers.") from None
+    names = list(data.dtype.names or ())
+    values = [n for n in names if n != "t"]
+    column = key if key in values else (values[0] if len(values) == 1 else None)
+    if "t" not in names or column is None:
+        raise CommandError(f"--input {key}={path}: expected a column 't' (s) and one value "
+                           f"column (or one named '{key}'), got columns "
+                           f"{', '.join(names) or '(none)'}.")
+    return np.atleast_1d(data["t"]), np.atleast_1d(data[column])
+
+
 def _number_or_quantity(key: str, value: str) -> float | str:
     try:
         number = float(value)
@@ -378,15 +425,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     out = _output_path(args.out, "--out", LOG_SUFFIXES)
     plot = _output_path(args.plot, "--plot", _figure_suffixes()) if args.plot else None
 
+    inputs = _parse_inputs(args.input)
     model = entry.build(variant, **params)
     res = mt.simulate(model, settings.t_stop, solver=settings.solver, dt=settings.dt,
-                      rtol=settings.rtol, atol=settings.atol)
+                      rtol=settings.rtol, atol=settings.atol, inputs=inputs or None)
     outputs = dict(entry.output_paths(variant))
     final = {label: res.final(path) for label, path in outputs.items()}
     units = {label: entry.output_units.get(label, res.units.get(path, ""))
              for label, path in outputs.items()}
     # Reference values hold for the default experiment only.
-    default_run = not params and settings.t_stop == entry.experiment.t_stop
+    default_run = not params and not inputs and settings.t_stop == entry.experiment.t_stop
     expected = {k: v for k, v in entry.expected.items() if k in final} if default_run else {}
 
     files: dict[str, str] = {}
@@ -399,11 +447,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.json:
         _emit_json({"model": entry.name, "variant": variant, **settings.as_dict(),
                     "parameters": entry.values(**params), "set": params,
+                    "inputs": list(args.input),
                     "outputs": outputs, "units": units, "final": final,
                     "expected": expected, "stats": res.stats.as_dict(), "files": files})
         return EXIT_OK
 
     changed = "".join(f", {k} = {v}" for k, v in params.items())
+    changed += "".join(f", input {item}" for item in args.input)
     _emit(f"{entry.name} ({variant}{changed}): {settings.t_stop:g} s, "
           f"{settings.describe()}")
     _emit(f"\nfinal values at t = {res.t[-1]:g} s:")
@@ -913,6 +963,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dt", type=float, metavar="H", help="step of a fixed-step solver, in s")
     p.add_argument("--rtol", type=float, metavar="R", help="relative tolerance")
     p.add_argument("--atol", type=float, metavar="A", help="absolute tolerance")
+    p.add_argument("--input", action="append", default=[], metavar="U=VALUE|FILE.csv",
+                   help="drive external input U of the model: a constant (--input u=3.5, "
+                        "--input \"u=3.5 V\") or a CSV table with columns t and a value "
+                        "(piecewise linear, held outside its range). Repeatable.")
     p.add_argument("--out", metavar="FILE",
                    help="write the whole simulation log (.csv: columns t, then instance "
                         "paths; or .parquet)")

@@ -37,6 +37,9 @@ class CompiledModel:
         Algebraic unknowns left to the DAE solver (tearing variables of nonlinear loops).
     param_names, param_units, p0
         Parameters by instance path, their units and default values (SI).
+    input_names, input_index, input_units, input_docs, input_defaults
+        External inputs: the slots of ``p`` that are signals of time (see
+        :mod:`mechatron.solvers.inputs`).
     names, units, docs
         Every logged variable by instance path.
     relations : list of (owner, op)
@@ -70,6 +73,14 @@ class CompiledModel:
     #: actions): called at the initial time and at the end of every fixed step.
     f_events: ca.Function = None
     param_bounds: list = field(default_factory=list)   # (min or None, max or None)
+    #: External inputs (signal inputs of the root component) by instance path: each is a
+    #: slot ``input_index[k]`` of ``p`` that ``simulate(inputs=...)`` fills with a signal
+    #: of time; ``input_defaults`` holds each one's start value (NaN: none, must be given)
+    input_names: list = field(default_factory=list)
+    input_index: list = field(default_factory=list)
+    input_units: list = field(default_factory=list)
+    input_docs: list = field(default_factory=list)
+    input_defaults: list = field(default_factory=list)
     report: dict = field(default_factory=dict)
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -154,6 +165,9 @@ class CompiledModel:
         return state
 
     def __setstate__(self, state):
+        for key in ("input_names", "input_index", "input_units", "input_docs",
+                    "input_defaults"):   # files saved before external inputs existed
+            state.setdefault(key, [])
         for key in _FUNCS:
             if state.get(key) is not None:
                 state[key] = ca.Function.deserialize(state[key])

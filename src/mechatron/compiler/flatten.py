@@ -33,6 +33,9 @@ class FlatParameter:
     doc: str
     owner: str
     bounds: tuple = (None, None)
+    #: an external input of the model (a signal Input of the root component): a slot of
+    #: ``p`` that ``simulate(inputs=...)`` fills with a signal of time
+    is_input: bool = False
 
 
 @dataclass
@@ -136,6 +139,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
         if isinstance(el, Component):
             flat.components[el.path] = type(el).__name__
     _bind_symbols(flat, elements, problems)
+    _external_inputs(flat, model)
     try:
         with flat.context:
             connects = _collect_equations(flat, elements, problems)
@@ -227,6 +231,25 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
                                                     getattr(decl, "state_select", "default"))
                 ctx.unknowns[path] = sym
         el._syms = syms
+
+
+def _external_inputs(flat: FlatModel, model: Component) -> None:
+    """The root component's own signal inputs are the model's external inputs (as a
+    top-level ``input`` of Modelica or a root Inport of Simulink). Each one gets a
+    parameter slot ``p_u`` (named like the input; its default is the input's start value,
+    0 without one, which ``simulate`` then asks for) and the equation ``u == p_u``; ``u``
+    stays a logged variable."""
+    for key, decl in type(model)._declarations.items():
+        if not isinstance(decl, Input):
+            continue
+        var = flat.variables[key]
+        default = var.start if var.start is not None else 0.0
+        # a distinct symbol name: symbols are looked up by name in later passes
+        sym = ca.SX.sym(f"{key}#input")
+        flat.parameters[key] = FlatParameter(key, sym, float(default), var.unit, var.doc,
+                                             "", (None, None), is_input=True)
+        flat.equations.append(FlatEquation(var.sym - sym, f"{key} == external input {key}",
+                                           ""))
 
 
 def _domain_hint(el, decl) -> str:
@@ -404,7 +427,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
         group.sort(key=_port_path)
         flat.connection_sets.append([_set_member(p) for p in group])
         if isinstance(group[0], SignalRef):
-            _signal_set(flat, group, problems)
+            _signal_set(flat, group, problems, model)
         else:
             _physical_set(flat, group)
     for el in elements:
@@ -414,7 +437,8 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
                             f"{_hint(el)}".rstrip())
         if isinstance(el, Component):
             for key, decl in type(el)._declarations.items():
-                if isinstance(decl, Input) and _sigkey(el, key) not in connected:
+                if isinstance(decl, Input) and _sigkey(el, key) not in connected \
+                        and el is not model:   # the root's inputs are external inputs
                     problems.append(f"signal input '{_join(el.path, key)}' is not connected. "
                                     "Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, uf, ports, problems)
@@ -461,16 +485,22 @@ def _compatible(a, b) -> str:
     return ""
 
 
-def _signal_set(flat: FlatModel, group: list[SignalRef], problems) -> None:
-    outputs = [g for g in group if isinstance(g.declaration, Output)]
+def _signal_set(flat: FlatModel, group: list[SignalRef], problems, model=None) -> None:
+    # an external input (a signal Input of the root component) drives its set
+    outputs = [g for g in group if isinstance(g.declaration, Output)
+               or (g.owner is model and isinstance(g.declaration, Input))]
     paths = ", ".join(g.path() for g in group)
     if not outputs:
         problems.append(f"signals {paths} are connected without an output to drive them. "
                         "Connect a source or a block output.")
         return
     if len(outputs) > 1:
+        external = any(isinstance(o.declaration, Input) for o in outputs)
         problems.append(f"signal outputs {', '.join(o.path() for o in outputs)} are "
-                        "connected together; an input can be driven by one output only.")
+                        "connected together; an input can be driven by one output only"
+                        + (" (an input of the model's root component is an external "
+                           "input: it drives what it is connected to)." if external
+                           else "."))
         return
     src = outputs[0].path()
     unit = outputs[0].declaration.unit

@@ -200,7 +200,12 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
         z_start=z_start, targets=targets, f_ode=f_ode, f_alg=f_alg, f_out=f_out,
         f_zero=f_zero, f_dist=f_dist, f_transition=f_transition, f_scales=f_scales,
         f_events=f_events,
-        param_bounds=[q.bounds for q in params], report=report)
+        param_bounds=[q.bounds for q in params], report=report,
+        input_names=[q.name for q in params if q.is_input],
+        input_index=[i for i, q in enumerate(params) if q.is_input],
+        input_units=[q.unit for q in params if q.is_input],
+        input_docs=[q.doc for q in params if q.is_input],
+        input_defaults=[_input_default(flat, q.name) for q in params if q.is_input])
     timings["total"] = sum(timings.values())
     return cm
 
@@ -223,6 +228,11 @@ def _state_preference(flat, alias) -> dict[str, float]:
         if prio == "high":
             pref[rep] = pref.get(rep, 0.0) + 0.5
     return {n: v for n, v in pref.items() if v}
+
+
+def _input_default(flat, name: str) -> float:
+    start = flat.variables[name].start
+    return float("nan") if start is None else float(start)
 
 
 def _guess(flat, alias, name: str) -> float:

@@ -272,6 +272,28 @@ class System(Component):
                              f"'{element._parent.path or element._parent._name}' already.")
         return self._adopt(name, element)
 
+    def input(self, name: str, unit: str = "1", *, start: float | None = None,
+              doc: str = "") -> SignalRef:
+        """Declare an external input of this model (``mt.Input`` on the root component)
+        and return it for ``connect``; give its signal with ``simulate(..., inputs=...)``.
+
+        ``start`` is its default value (used when ``inputs`` omits it). The System's class
+        becomes a subclass holding the declaration (same name), so an instance with inputs
+        is not picklable; the compiled model is.
+        """
+        if not name.isidentifier() or name.startswith("_"):
+            raise ModelError(f"System '{self._name}': '{name}' is not a valid input name; "
+                             "use letters, digits and underscores.")
+        if name in self._children or name in type(self)._declarations or \
+                hasattr(type(self), name):
+            raise ModelError(f"System '{self._name}': the name '{name}' is taken already "
+                             "(a part, an input or a System method); choose another.")
+        cls = type(self)
+        self.__class__ = type(cls.__name__, (cls,), {
+            "__module__": cls.__module__, "__doc__": cls.__doc__,
+            name: Input(unit, start=start, doc=doc)})
+        return SignalRef(self, name)
+
     def connect(self, *ports) -> None:
         """Connect two or more ports (or a signal output to inputs)."""
         if len(ports) < 2:

@@ -202,8 +202,12 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
 
 
 def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, z0, p, *,
-                    method: str, iterations: int = 3):
-    """Run ``make_step`` from ``t0`` to ``t_stop``; return ``(t, Y, X_final)``."""
+                    method: str, iterations: int = 3, inputs=None):
+    """Run ``make_step`` from ``t0`` to ``t_stop``; return ``(t, Y, X_final)``.
+
+    ``inputs`` (:class:`mechatron.solvers.inputs.Inputs`, optional) gives the external
+    inputs, sampled at the start of each step and held over it (zero-order hold): each
+    step's ``p`` column carries them into the native loop."""
     n = int(round((t_stop - t0) / dt))
     if n < 1:
         raise SimulationError(f"t_stop - t0 = {t_stop - t0:g} s is shorter than one step "
@@ -220,12 +224,14 @@ def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, 
         run = cm._cache.get(key)
         if run is None:
             run = cm._cache[key] = step.mapaccum("run", m)
-        xs, y = run(xa, ca.DM.zeros(0, m), np.repeat(p.reshape(-1, 1), m, axis=1),
-                    times[start:start + m].reshape(1, -1))
+        pm = (np.repeat(p.reshape(-1, 1), m, axis=1) if inputs is None
+              else inputs.columns(p, times[start:start + m]))
+        xs, y = run(xa, ca.DM.zeros(0, m), pm, times[start:start + m].reshape(1, -1))
         xs = np.array(xs, dtype=float).reshape(-1, m)
         xa = xs[:, -1]
         ys.append(np.array(y, dtype=float).reshape(-1, m))
-    y0 = np.array(cm.f_out(t0, X0, z0, p), dtype=float).reshape(-1, 1)
+    p0 = p if inputs is None else inputs.columns(p, t0)[:, 0]
+    y0 = np.array(cm.f_out(t0, X0, z0, p0), dtype=float).reshape(-1, 1)
     Y = np.hstack([y0] + ys)
     t = np.concatenate([[t0], t0 + dt * np.arange(1, n + 1)])
     return t, Y, xa[:cm.nX]

@@ -37,7 +37,8 @@ def evaluate_outputs(cm: CompiledModel, t: np.ndarray, X: np.ndarray, Z: np.ndar
                      p: np.ndarray) -> np.ndarray:
     """Every logged variable at every point: array (n_logged, n_points).
 
-    ``X`` is (nX, n) and ``Z`` is (nz, n), one column per point.
+    ``X`` is (nX, n) and ``Z`` is (nz, n), one column per point; ``p`` is one vector, or
+    one column per point (a model driven by external inputs).
     """
     n = t.size
     n_y = len(cm.names)
@@ -45,13 +46,14 @@ def evaluate_outputs(cm: CompiledModel, t: np.ndarray, X: np.ndarray, Z: np.ndar
     tt = np.ascontiguousarray(t, dtype=float)
     Xf = np.asarray(X, dtype=float).ravel(order="F")
     Zf = np.asarray(Z, dtype=float).ravel(order="F")
+    Pf = np.asarray(p, dtype=float).ravel(order="F") if np.ndim(p) == 2 else None
     out = np.empty(n_y * n)
     tiles: dict[int, np.ndarray] = {}
     step = chunk_size(n_y)
     for k in range(0, n, step):
         m = min(step, n - k)
         _, buf, evaluate = _mapped(cm, m)
-        pm = tiles.get(m)
+        pm = tiles.get(m) if Pf is None else Pf[k * Pf.size // n:(k + m) * Pf.size // n]
         if pm is None:
             pm = tiles[m] = np.tile(np.asarray(p, dtype=float), m)
         buf.set_arg(0, memoryview(tt[k:k + m]))

@@ -13,6 +13,7 @@ from mechatron.errors import SimulationError
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.fixed import METHODS, integrate_fixed
 from mechatron.solvers.initial import initialize
+from mechatron.solvers.inputs import resolve_inputs
 from mechatron.solvers.logging import evaluate_outputs
 from mechatron.solvers.native import integrate_native
 from mechatron.solvers.variable import PLUGINS, integrate_variable
@@ -46,6 +47,10 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         Step size of a fixed-step solver (required for those).
     params : dict, optional
         Parameter values by instance path (numbers in SI or quantity strings).
+    inputs : dict, optional
+        Signals for the model's external inputs (signal inputs of its root component), by
+        name: a constant, a ``(t, values)`` table (piecewise linear, held outside its
+        range) or a function of time; see :mod:`mechatron.solvers.inputs`.
     rtol, atol : float
         Tolerances of the variable-step solvers.
     t_out : array_like, optional
@@ -58,10 +63,6 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         fiftieth of the simulated time, or half the shortest time scale a component
         declares).
     """
-    if inputs is not None:
-        raise SimulationError("simulate(inputs=...): external inputs are not supported "
-                              "yet; drive the model with source blocks (blocks.Step, "
-                              "blocks.Sine, ...).")
     if solver not in SOLVERS:
         raise SimulationError(f"unknown solver '{solver}'. Choose one of "
                               f"{', '.join(SOLVERS)}.")
@@ -78,11 +79,14 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         raise SimulationError(f"model '{cm.name}': t_stop must be a number > t0 = {t0:g}, "
                               f"got {t_stop!r}.")
     p = cm.parameter_vector(params)
+    ext = resolve_inputs(cm, inputs, params, t0, t_stop)   # external inputs, or None
+    if ext is not None:
+        p = ext.apply(p)
     clock = _time.perf_counter()
-    X0, z0, init_report = initialize(cm, p, t0)
+    X0, z0, init_report = initialize(cm, p if ext is None else ext.columns(p, t0)[:, 0], t0)
     if solver in METHODS:
         t, Y, Xf = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p, method=solver,
-                                   iterations=iterations)
+                                   iterations=iterations, inputs=ext)
         n = len(t) - 1
         if t_out is not None:
             t_req = np.asarray(t_out, dtype=float)
@@ -91,9 +95,13 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
                             rhs_evals=n * _stages(solver), jac_evals=0)
     elif solver == "rodas4":
+        if ext is not None and ext.drive:
+            raise SimulationError(f"model '{cm.name}': solver 'rodas4' takes constant "
+                                  "inputs only; for tables or functions of time use "
+                                  "solver='auto' (or 'cvodes', 'rk45').", path=cm.name)
         grid = _grid(cm, t0, t_stop, t_out)
         Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
-                                     max_step=max_step)
+                                     max_step=_max_step(cm, p, grid, max_step))
         t = grid
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
             t, Y = t[1:], Y[:, 1:]
@@ -103,19 +111,12 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     else:
         grid = _grid(cm, t0, t_stop, t_out)
         plugin = solver
-        if max_step is None and cm.f_scales is not None and cm.f_scales.size1_out(0):
-            scales = np.array(cm.f_scales(p), dtype=float).ravel()
-            scales = scales[np.isfinite(scales) & (scales > 0)]
-            if scales.size:
-                max_step = 0.5 * float(scales.min())
-        if max_step is None and cm.nr:
-            # an event indicator that depends on time directly (a sine through a
-            # quantizer) can cross and cross back within one long step of a model whose
-            # states barely move; Simulink's default bounds the step the same way
-            max_step = (float(grid[-1]) - t0) / 50
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
-                                            atol=atol, max_step=max_step)
-        Y = evaluate_outputs(cm, grid, X, Z, p)
+                                            atol=atol, max_step=_max_step(cm, p, grid,
+                                                                          max_step),
+                                            inputs=ext)
+        Y = evaluate_outputs(cm, grid, X, Z,
+                             p if ext is None else ext.logged_columns(p, grid))
         t, Xf = grid, X[:, -1]
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
             t, Y = t[1:], Y[:, 1:]
@@ -139,6 +140,23 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     res.initialization = init_report
     res.event_times = _event_times(cm, Xf)
     return res
+
+
+def _max_step(cm: CompiledModel, p: np.ndarray, grid: np.ndarray,
+              max_step: float | None) -> float | None:
+    """The largest step of a variable-step run: the user's, else half the shortest time
+    scale a component declares, else (for models with events) a fiftieth of the run."""
+    if max_step is None and cm.f_scales is not None and cm.f_scales.size1_out(0):
+        scales = np.array(cm.f_scales(p), dtype=float).ravel()
+        scales = scales[np.isfinite(scales) & (scales > 0)]
+        if scales.size:
+            max_step = 0.5 * float(scales.min())
+    if max_step is None and cm.nr:
+        # an event indicator that depends on time directly (a sine through a
+        # quantizer) can cross and cross back within one long step of a model whose
+        # states barely move; Simulink's default bounds the step the same way
+        max_step = (float(grid[-1]) - float(grid[0])) / 50
+    return max_step
 
 
 def _grid(cm: CompiledModel, t0: float, t_stop: float, t_out) -> np.ndarray:

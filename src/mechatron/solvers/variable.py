@@ -18,6 +18,7 @@ import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
+from mechatron.solvers.inputs import driven_parameters
 
 __all__ = ["integrate_variable"]
 
@@ -61,25 +62,29 @@ def choose_plugin(cm: CompiledModel, solver: str) -> str:
 
 
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
-                atol: float, max_step: float | None) -> ca.Function:
+                atol: float, max_step: float | None, drive: tuple = ()) -> ca.Function:
+    # drive: (p slot, table length) of each external input given as a table; the tables
+    # are data of the integrator's parameter vector (see mechatron.solvers.inputs)
     key = ("var", plugin, grid.size, float(grid[0]), float(grid[-1]), hash(grid.tobytes()),
-           rtol, atol, max_step)
+           rtol, atol, max_step, drive)
     cached = cm._cache.get(key)
     if cached is not None:
         return cached
-    t = ca.SX.sym("t")
+    S = ca.MX if drive else ca.SX   # MX passes input tables as blocks, not elements
+    t = S.sym("t")
     # SUNDIALS needs at least one state: a model of algebraic equations only gets a
     # constant dummy state (dropped again by integrate_variable)
     pad = 1 if cm.nX == 0 else 0
-    Xi = ca.SX.sym("X", cm.nX + pad)
+    Xi = S.sym("X", cm.nX + pad)
     X = Xi[:cm.nX]
-    z = ca.SX.sym("z", cm.nz)
-    p = ca.SX.sym("p", cm.p0.size)
-    u = ca.SX.sym("u", 0)
-    empty = ca.SX(0, 1)
-    outs = [ca.vertcat(cm.f_ode(t, X, z, p), ca.SX.zeros(pad)),
-            cm.f_alg(t, X, z, p) if cm.nz else empty, empty,
-            cm.f_zero(t, X, z, p) if cm.nr else empty]
+    z = S.sym("z", cm.nz)
+    p = S.sym("p", cm.p0.size + 2 * sum(n for _, n in drive))
+    pe = driven_parameters(cm.p0.size, t, p, drive) if drive else p
+    u = S.sym("u", 0)
+    empty = S(0, 1)
+    outs = [ca.vertcat(cm.f_ode(t, X, z, pe), S.zeros(pad)),
+            cm.f_alg(t, X, z, pe) if cm.nz else empty, empty,
+            cm.f_zero(t, X, z, pe) if cm.nr else empty]
     dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
@@ -87,8 +92,8 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     if max_step:
         opts["max_step_size"] = max_step
     if cm.nr:
-        idx = ca.SX.sym("index")
-        post_x, post_z = cm.f_transition(idx, t, X, z, p)
+        idx = S.sym("index")
+        post_x, post_z = cm.f_transition(idx, t, X, z, pe)
         opts["transition"] = ca.Function("transition", [idx, t, X, z, p, u],
                                          [post_x, post_z], ca.event_in(), ca.event_out())
         opts["event_tol"] = 1e-13
@@ -104,8 +109,11 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
 
 def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: np.ndarray,
                        p: np.ndarray, *, solver: str, rtol: float, atol: float,
-                       max_step: float | None = None):
-    """Integrate on ``grid``; return ``(X, Z, stats)`` with one column per grid point."""
+                       max_step: float | None = None, inputs=None):
+    """Integrate on ``grid``; return ``(X, Z, stats)`` with one column per grid point.
+
+    ``inputs`` (:class:`mechatron.solvers.inputs.Inputs`, optional) drives the model's
+    external inputs."""
     plugin = choose_plugin(cm, solver)
     if cm.nr and plugin in ("cvodes", "idas"):
         owners = sorted({owner for owner, _ in cm.relations})
@@ -116,7 +124,10 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
             "'rosenbrock' (stiff) or 'rk45'.", path=cm.name)
     if cm.nX == 0 and cm.nz == 0:   # outputs are functions of time alone
         return np.zeros((0, grid.size)), np.zeros((0, grid.size)), {}, "none"
-    integ = _integrator(cm, plugin, grid, rtol, atol, max_step)
+    drive = inputs.drive if inputs is not None else ()
+    if drive:
+        p = inputs.integrator_parameters(p)
+    integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive)
     try:
         sol = integ(x0=np.concatenate([X0, np.zeros(1 if cm.nX == 0 else 0)]), z0=z0, p=p)
     except RuntimeError as exc:
