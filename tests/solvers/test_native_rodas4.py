@@ -174,7 +174,11 @@ def test_database_models_agree_with_cvodes(name, variant):
         assert np.max(np.abs(a[path] - b[path])) <= 1e-5 * scale, path
 
 
-def test_models_with_events_are_refused_with_advice():
+def test_rectifier_events_at_their_analytic_times():
+    """Half-wave rectifier: 5 V, 50 Hz through a piecewise-linear diode into 100 Ohm. The
+    diode switches where the source reaches Vf (1 + R Goff), rising and falling: six
+    events in 0.05 s, the last at 0.05 s - t1, t1 = asin(Vf (1 + R Goff) / 5) / (2 pi 50).
+    """
     m = mt.System("rectifier")
     src = m.add("src", ControlledVoltageSource())
     sine = m.add("sine", blocks.Sine(amplitude=5.0, f=50.0))
@@ -185,8 +189,50 @@ def test_models_with_events_are_refused_with_advice():
     m.connect(src.p, d.p)
     m.connect(d.n, r.p)
     m.connect(r.n, src.n, gnd.port)
-    with pytest.raises(SimulationError, match=r"rodas4.*events.*solver='auto'"):
-        mt.simulate(m, 0.05, solver="rodas4")
+    cm = mt.compile_model(m)
+    P = {n.split(".")[-1]: v for n, v in zip(cm.param_names, cm.p0) if n.startswith("d.")}
+    res = mt.simulate(cm, 0.05, solver="rodas4", rtol=1e-10, atol=1e-12)
+    t1 = np.arcsin(P["Vf"] * (1 + 100.0 * P["Goff"]) / 5.0) / (2 * np.pi * 50.0)
+    assert res.stats.events == {"d": 6}
+    assert abs(res.event_times["d"] - (0.05 - t1)) < 1e-9
+    # the current between events against the network's two linear states
+    v = 5.0 * np.sin(2 * np.pi * 50.0 * res.t)
+    on = v > P["Vf"] * (1 + 100.0 * P["Goff"])
+    i_on = (v - P["Vf"] + P["Ron"] * P["Goff"] * P["Vf"]) / (100.0 + P["Ron"])
+    i_off = P["Goff"] * v / (1 + 100.0 * P["Goff"])
+    np.testing.assert_allclose(res["r.i"], np.where(on, i_on, i_off), atol=1e-9)
+
+
+@pytest.mark.parametrize("name, variant", [("buck_converter", "switched"),
+                                           ("servo_encoder", "acausal"),
+                                           ("geared_drive", "acausal"),
+                                           ("stepper_motor", "acausal")])
+def test_hybrid_database_models_agree_with_auto(name, variant):
+    """Switching converters, sampled controllers, backlash and steps: the same events as
+    the CasADi integrators (counted per component) and the same waveforms."""
+    entry = mt.models.get(name)
+    cm = mt.compile_model(entry.build(variant))
+    t_stop = entry.experiment.t_stop
+    a = mt.simulate(cm, t_stop, solver="rodas4", rtol=1e-9, atol=1e-11)
+    b = mt.simulate(cm, t_stop, solver="auto", rtol=1e-9, atol=1e-11)
+    assert a.stats.events == b.stats.events and sum(a.stats.events.values()) > 0
+    for path in entry.output_paths(variant).values():
+        scale = np.max(np.abs(b[path])) + 1e-9
+        assert np.max(np.abs(a[path] - b[path])) <= 1e-6 * scale, path
+
+
+def test_chattering_is_detected_as_with_auto():
+    """x' = -sign(x) from x = 1: a sliding mode from t = 1 s, reported with its component."""
+    m = mt.System("chatter")
+    sw = m.add("ideal_relay", blocks.Sign())
+    g = m.add("g", blocks.Gain(k=-1.0))
+    i = m.add("integ", blocks.Integrator(y=1.0))
+    m.connect(i.y, sw.u)
+    m.connect(sw.y, g.u)
+    m.connect(g.y, i.u)
+    with pytest.raises(SimulationError, match=r"rodas4: chattering at t = 1 s: events at "
+                                              r"'ideal_relay'"):
+        mt.simulate(m, 2.0, solver="rodas4")
 
 
 def test_blow_up_is_reported_with_its_time():

@@ -12,8 +12,14 @@ name holds a hash of the source and flags). One call then integrates the whole r
 writes every logged variable at every output time (cubic Hermite interpolation between
 steps), so Python only prepares arrays and reads the result.
 
-Scope: ODE models (no algebraic unknowns left for a DAE solver) without events, with up
-to :data:`MAX_STATES` states (the Jacobian is dense). Other models raise a
+Events: after every accepted step the relations' indicators (mode times distance) are
+checked; one that went from positive to zero or below is located on the step's Hermite
+interpolant (secant iteration with Illinois safeguard, to :data:`EVENT_TOL`), and the
+model's compiled transition (the same one the CasADi integrators call) updates the modes,
+counters and discrete states before the integration restarts at the event.
+
+Scope: ODE models (no algebraic unknowns left for a DAE solver) with up to
+:data:`MAX_STATES` states (the Jacobian is dense). Other models raise a
 :class:`~mechatron.errors.SimulationError` that names the solver to use instead.
 Parameters are an argument of the library, so changing them never recompiles.
 """
@@ -33,6 +39,7 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
+from mechatron.compiler.events import CHATTER_FLAG
 from mechatron.errors import SimulationError
 
 __all__ = ["integrate_native", "native_library", "compiler", "cache_dir", "MAX_STATES"]
@@ -41,6 +48,9 @@ __all__ = ["integrate_native", "native_library", "compiler", "cache_dir", "MAX_S
 MAX_STATES = 400
 FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99")
 MAX_STEPS = 10_000_000
+CHATTERING = -7
+#: Width of the time bracket of a located event, relative to max(1 s, |t|).
+EVENT_TOL = 1e-14
 _MESSAGES = {
     -1: "took more than {max_steps} steps",
     -2: "the step size fell below the resolution of t (a discontinuity without an "
@@ -48,6 +58,7 @@ _MESSAGES = {
     -3: "the model's equations gave a value that is not finite",
     -4: "the iteration matrix I/(h gamma) - J stayed singular",
     -5: "out of memory",
+    -6: "events kept coming at the same instant (more than 1000 in a row)",
 }
 
 
@@ -66,13 +77,6 @@ def cache_dir() -> Path:
 
 
 def _check_scope(cm: CompiledModel) -> None:
-    if cm.nr:
-        owners = sorted({owner or cm.name for owner, _ in cm.relations})
-        raise SimulationError(
-            f"model '{cm.name}': solver 'rodas4' does not handle events, and "
-            f"{', '.join(owners[:4])}{' ...' if len(owners) > 4 else ''} switch. Use "
-            "solver='auto' (it locates the events), or 'rk45' / 'rosenbrock'.",
-            path=cm.name)
     if cm.nz:
         raise SimulationError(
             f"model '{cm.name}': solver 'rodas4' integrates ODEs, and this model keeps "
@@ -88,20 +92,28 @@ def _check_scope(cm: CompiledModel) -> None:
 def _source(cm: CompiledModel) -> str:
     t = ca.SX.sym("t")
     x = ca.SX.sym("x", cm.nx)
+    m = ca.SX.sym("m", cm.nX - cm.nx)     # modes, event counters, event times
     p = ca.SX.sym("p", cm.p0.size)
     z = ca.SX(0, 1)
-    f = cm.f_ode(t, x, z, p)
+    X = ca.vertcat(x, m)
+    f = cm.f_ode(t, X, z, p)[:cm.nx]
     funcs = [
-        ca.Function("mt_f", [t, x, p], [f]),
-        ca.Function("mt_jac", [t, x, p], [ca.densify(ca.jacobian(f, x)),
-                                          ca.densify(ca.jacobian(f, t))]),
-        ca.Function("mt_out", [t, x, p], [ca.densify(cm.f_out(t, x, z, p))]),
+        ca.Function("mt_f", [t, x, m, p], [f]),
+        ca.Function("mt_jac", [t, x, m, p], [ca.densify(ca.jacobian(f, x)),
+                                             ca.densify(ca.jacobian(f, t))]),
+        ca.Function("mt_out", [t, x, m, p], [ca.densify(cm.f_out(t, X, z, p))]),
     ]
+    if cm.nr:
+        k = ca.SX.sym("k")
+        funcs += [ca.Function("mt_zero", [t, x, m, p], [ca.densify(cm.f_zero(t, X, z, p))]),
+                  ca.Function("mt_trans", [k, t, x, m, p],
+                              [ca.densify(cm.f_transition(k, t, X, z, p)[0])])]
     cg = ca.CodeGenerator("mt_model.c", {"with_header": False})
     for fn in funcs:
         cg.add(fn)
     template = resources.files("mechatron.solvers").joinpath("rodas4.c").read_text()
-    sizes = f"\n#define MT_NX {cm.nx}\n#define MT_NY {len(cm.names)}\n"
+    sizes = (f"\n#define MT_NX {cm.nx}\n#define MT_NR {cm.nr}\n#define MT_NY {len(cm.names)}\n"
+             f"#define MT_CHATTER_FLAG {CHATTER_FLAG:.17g}\n")
     return cg.dump() + sizes + template
 
 
@@ -168,7 +180,8 @@ def integrate_native(cm: CompiledModel, grid: np.ndarray, x0: np.ndarray, p: np.
     """Integrate on ``grid`` with the compiled Rodas4.
 
     Returns ``(Y, xf, stats)``: every logged variable at every grid point, shape
-    ``(len(cm.names), grid.size)``; the final state; and a dict of solver counts.
+    ``(len(cm.names), grid.size)``; the final integration state ``X`` (states, then the
+    relations' modes, event counters and event times); and a dict of solver counts.
     ``fixed_step`` makes every step that size and accepts it (convergence-order tests).
     """
     lib = native_library(cm)
@@ -177,18 +190,23 @@ def integrate_native(cm: CompiledModel, grid: np.ndarray, x0: np.ndarray, p: np.
     p = np.ascontiguousarray(p, dtype=float)
     n_y = len(cm.names)
     y = np.empty((grid.size, n_y))
-    xf = np.empty(max(cm.nx, 1))
-    info = np.zeros(8)
+    xf = np.empty(max(cm.nX, 1))
+    info = np.zeros(10)
+    event_tol = EVENT_TOL * max(1.0, abs(float(grid[0])), abs(float(grid[-1])))
     code = lib.run(grid.ctypes.data, grid.size, x0.ctypes.data, p.ctypes.data,
-                   float(rtol), float(atol), float(max_step or 0.0), 0.0, MAX_STEPS,
+                   float(rtol), float(atol), float(max_step or 0.0), event_tol, MAX_STEPS,
                    float(fixed_step or 0.0), y.ctypes.data, xf.ctypes.data,
                    info.ctypes.data)
     stats = {"n_steps": int(info[0]), "n_reject": int(info[1]), "n_rhs": int(info[2]),
-             "n_jac": int(info[3]), "n_lu": int(info[4])}
-    if code != 0:
+             "n_jac": int(info[3]), "n_lu": int(info[4]), "n_events": int(info[8]),
+             "n_zero": int(info[9])}
+    if code == CHATTERING:
+        # the transition marked a relation as chattering; mt.simulate names it from X
+        y[int(info[7]):] = np.nan
+    elif code != 0:
         what = _MESSAGES.get(code, f"failed with code {code}").format(max_steps=MAX_STEPS)
         raise SimulationError(
             f"model '{cm.name}': solver 'rodas4' stopped at t = {info[5]:.9g} s: {what}. "
             "Check the parameters, try a tighter tolerance or solver='auto'.",
             path=cm.name)
-    return y.T, xf[:cm.nx], stats
+    return y.T, xf[:cm.nX], stats

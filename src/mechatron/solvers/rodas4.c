@@ -1,11 +1,15 @@
 /* Rodas4: a variable-step, L-stable Rosenbrock method of order 4 with an embedded order-3
  * error estimate (Hairer & Wanner, Solving ODEs II, section IV.7), for x' = f(t, x).
  *
- * This file is appended to the C that CasADi generates for one model:
- *   mt_f(t, x, p)   -> f             the state derivative
- *   mt_jac(t, x, p) -> J, f_t        df/dx (dense, column-major) and df/dt
- *   mt_out(t, x, p) -> y             every logged variable
- * and to the sizes MT_NX, MT_NY.  One call integrates from tout[0] to tout[nout - 1] and
+ * This file is appended to the C that CasADi generates for one model, with m the modes,
+ * event counters and event times of its relations (constant between events):
+ *   mt_f(t, x, m, p)   -> f             the state derivative
+ *   mt_jac(t, x, m, p) -> J, f_t        df/dx (dense, column-major) and df/dt
+ *   mt_out(t, x, m, p) -> y             every logged variable
+ *   mt_zero(t, x, m, p) -> g            event indicators (mode * distance), if MT_NR > 0
+ *   mt_trans(k, t, x, m, p) -> X        the state after an event of relation k
+ * and to the sizes MT_NX, MT_NR, MT_NY and the chattering mark MT_CHATTER_FLAG (see
+ * mechatron.compiler.events).  One call integrates from tout[0] to tout[nout - 1] and
  * writes y at every output time (cubic Hermite interpolation of x between steps, exact
  * at the steps), so the whole run is a single native call.
  *
@@ -18,6 +22,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define MT_STAGES 6
 
@@ -43,7 +48,8 @@ static const double mt_m[MT_STAGES] = {
 
 enum {
     MT_OK = 0, MT_MAX_STEPS = -1, MT_STEP_TOO_SMALL = -2, MT_NOT_FINITE = -3,
-    MT_SINGULAR = -4, MT_NO_MEMORY = -5
+    MT_SINGULAR = -4, MT_NO_MEMORY = -5, MT_ZENO = -6,
+    MT_CHATTERING = -7
 };
 
 /* One evaluation context per generated function: its work arrays. */
@@ -67,6 +73,8 @@ static int mt_ctx_init(mt_ctx *c, int (*work)(casadi_int *, casadi_int *, casadi
 static void mt_ctx_free(mt_ctx *c) {
     free(c->iw);
     free(c->w);
+    c->iw = 0;
+    c->w = 0;
 }
 
 static int mt_all_finite(const double *v, int n) {
@@ -137,34 +145,117 @@ static double mt_norm(const double *v, const double *x0, const double *x1, int n
     return sqrt(s / n);
 }
 
-/* Integrate; see the top of the file.  info (8 entries) receives the accepted steps,
- * rejected steps, f evaluations, Jacobian evaluations, LU factorizations, the time
- * reached, the last step size and the number of output points written.  With fixed_h > 0
- * every step has that size and is accepted (for convergence-order tests).  Returns MT_OK
- * or a negative code. */
+/* The integration state besides x: the relations' modes, event counters and event
+ * times (MT_NM = 3 MT_NR values), constant between events. */
+#define MT_NM (3 * MT_NR)
+
+typedef struct {
+    const double *p;
+    double *m;                  /* modes, counters, event times */
+    mt_ctx cf, cj, co, cz, ct;
+    long nfev;
+} mt_model;
+
+static void mt_eval_f(mt_model *md, double t, const double *x, double *out) {
+    md->cf.arg[0] = &t;
+    md->cf.arg[1] = x;
+    md->cf.arg[2] = md->m;
+    md->cf.arg[3] = md->p;
+    md->cf.res[0] = out;
+    mt_f(md->cf.arg, md->cf.res, md->cf.iw, md->cf.w, 0);
+    ++md->nfev;
+}
+
+static void mt_eval_out(mt_model *md, double t, const double *x, double *out) {
+    md->co.arg[0] = &t;
+    md->co.arg[1] = x;
+    md->co.arg[2] = md->m;
+    md->co.arg[3] = md->p;
+    md->co.res[0] = out;
+    mt_out(md->co.arg, md->co.res, md->co.iw, md->co.w, 0);
+}
+
+#if MT_NR > 0
+static void mt_eval_zero(mt_model *md, double t, const double *x, double *g) {
+    md->cz.arg[0] = &t;
+    md->cz.arg[1] = x;
+    md->cz.arg[2] = md->m;
+    md->cz.arg[3] = md->p;
+    md->cz.res[0] = g;
+    mt_zero(md->cz.arg, md->cz.res, md->cz.iw, md->cz.w, 0);
+}
+
+/* The transition of relation k at (t, x): x and the modes/counters/times in place. */
+static void mt_eval_transition(mt_model *md, int k, double t, double *x, double *xpost) {
+    double index = (double)k;
+    int i;
+    md->ct.arg[0] = &index;
+    md->ct.arg[1] = &t;
+    md->ct.arg[2] = x;
+    md->ct.arg[3] = md->m;
+    md->ct.arg[4] = md->p;
+    md->ct.res[0] = xpost;
+    mt_trans(md->ct.arg, md->ct.res, md->ct.iw, md->ct.w, 0);
+    for (i = 0; i < MT_NX; ++i) x[i] = xpost[i];
+    for (i = 0; i < MT_NM; ++i) md->m[i] = xpost[MT_NX + i];
+}
+#endif
+
+/* Cubic Hermite interpolation between (x0, f0) at t0 and (x1, f1) at t0 + h. */
+static void mt_hermite(const double *x0, const double *f0, const double *x1,
+                       const double *f1, double h, double th, double *out, int n) {
+    double th2 = th * th, th3 = th2 * th;
+    double a0 = 2 * th3 - 3 * th2 + 1, b0 = (th3 - 2 * th2 + th) * h;
+    double a1 = -2 * th3 + 3 * th2, b1 = (th3 - th2) * h;
+    int i;
+    for (i = 0; i < n; ++i) out[i] = a0 * x0[i] + b0 * f0[i] + a1 * x1[i] + b1 * f1[i];
+}
+
+/* Integrate; see the top of the file.  x0 holds the whole integration state
+ * X = [x; modes; counters; event times] (MT_NX + MT_NM values), and so does xf at the end.
+ * Relations: after every accepted step the indicators g = mode * distance are checked; one
+ * that went from positive to <= 0 is an event, located on the Hermite interpolant by a
+ * safeguarded secant (Illinois) iteration to event_tol, after which the compiled transition
+ * updates X and the integration restarts there.  info (10 entries) receives the accepted
+ * steps, rejected steps, f evaluations, Jacobian evaluations, LU factorizations, the time
+ * reached, the last step size, the output points written, the events and the
+ * indicator evaluations.  With fixed_h > 0 every step has that size and is accepted (for
+ * convergence-order tests).  Returns MT_OK or a negative code. */
 int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
-              double rtol, double atol, double hmax, double h_init, long max_steps,
+              double rtol, double atol, double hmax, double event_tol, long max_steps,
               double fixed_h, double *y, double *xf, double *info) {
     const int n = MT_NX;
     const double eps = 2.220446049250313e-16;
     double t, h, tend, fac, err, h_last = 0.0;
-    long k_out = 0, steps = 0, rejected = 0, nfev = 0, njev = 0, nlu = 0, it;
+    long k_out = 0, steps = 0, rejected = 0, njev = 0, nlu = 0, events = 0, nzero = 0;
+    long same_time = 0, it;
     int i, j, s, status = MT_OK, reject_run = 0;
-    double *mem, *x, *x1, *f0, *f1, *fs, *ys, *jac, *ft, *w, *ks;
+    double *mem, *x, *x1, *f0, *f1, *fs, *ys, *jac, *ft, *w, *ks, *g0, *g1, *ga, *gb, *gc;
+    double *xpost;
     int *piv;
-    mt_ctx cf, cj, co;
-    size_t nn = (size_t)(n > 0 ? n : 1);
+    mt_model md;
+    size_t nn = (size_t)(n > 0 ? n : 1), nr = (size_t)(MT_NR > 0 ? MT_NR : 1);
 
+    memset(&md, 0, sizeof md);
+    md.p = p;
     if (nout < 1) return MT_OK;
-    if (mt_ctx_init(&cf, mt_f_work) || mt_ctx_init(&cj, mt_jac_work) ||
-        mt_ctx_init(&co, mt_out_work))
-        return MT_NO_MEMORY;
-    mem = (double *)malloc(sizeof(double) * (8 * nn + 2 * nn * nn + MT_STAGES * nn));
+    if (mt_ctx_init(&md.cf, mt_f_work) || mt_ctx_init(&md.cj, mt_jac_work) ||
+        mt_ctx_init(&md.co, mt_out_work)
+#if MT_NR > 0
+        || mt_ctx_init(&md.cz, mt_zero_work) || mt_ctx_init(&md.ct, mt_trans_work)
+#endif
+    ) {
+        status = MT_NO_MEMORY;
+        goto release;
+    }
+    mem = (double *)malloc(sizeof(double) * (8 * nn + 2 * nn * nn + MT_STAGES * nn +
+                                             11 * nr + nn + 1));
     piv = (int *)malloc(sizeof(int) * nn);
     if (!mem || !piv) {
         free(mem);
         free(piv);
-        return MT_NO_MEMORY;
+        status = MT_NO_MEMORY;
+        goto release;
     }
     x = mem;
     x1 = x + nn;
@@ -176,56 +267,50 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
     jac = ft + 2 * nn;
     w = jac + nn * nn;
     ks = w + nn * nn;
+    g0 = ks + MT_STAGES * nn;
+    g1 = g0 + nr;
+    ga = g1 + nr;
+    gb = ga + nr;
+    gc = gb + nr;
+    md.m = gc + nr;                     /* 3 nr (+1) values */
+    xpost = md.m + 3 * nr + 1;          /* nn + 3 nr values */
 
     t = tout[0];
     tend = tout[nout - 1];
     for (i = 0; i < n; ++i) x[i] = x0[i];
+    for (i = 0; i < MT_NM; ++i) md.m[i] = x0[n + i];
 
-#define MT_F(tt, xx, out)                                                       \
-    do {                                                                        \
-        casadi_real t_arg = (tt);                                               \
-        cf.arg[0] = &t_arg; cf.arg[1] = (xx); cf.arg[2] = p; cf.res[0] = (out); \
-        mt_f(cf.arg, cf.res, cf.iw, cf.w, 0);                                   \
-        ++nfev;                                                                 \
-    } while (0)
-#define MT_OUT(tt, xx, k)                                                       \
-    do {                                                                        \
-        casadi_real t_arg = (tt);                                               \
-        co.arg[0] = &t_arg; co.arg[1] = (xx); co.arg[2] = p;                    \
-        co.res[0] = y + (size_t)(k) * MT_NY;                                    \
-        mt_out(co.arg, co.res, co.iw, co.w, 0);                                 \
-    } while (0)
-
-    MT_OUT(t, x, 0);
+    mt_eval_out(&md, t, x, y);
     k_out = 1;
-    MT_F(t, x, f0);
+    mt_eval_f(&md, t, x, f0);
     if (!mt_all_finite(f0, n)) {
         status = MT_NOT_FINITE;
         goto done;
     }
+#if MT_NR > 0
+    mt_eval_zero(&md, t, x, g0);
+    ++nzero;
+#endif
 
     /* initial step: Hairer & Wanner's estimate from |x| and |f| and one Euler step */
     if (fixed_h > 0.0) {
         h = fixed_h;
-    } else if (h_init > 0.0) {
-        h = h_init;
     } else {
         double d0 = mt_norm(x, x, 0, n, rtol, atol), d1 = mt_norm(f0, x, 0, n, rtol, atol);
         double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1, d2, h1;
         if (h0 > tend - t) h0 = tend - t;
         for (i = 0; i < n; ++i) x1[i] = x[i] + h0 * f0[i];
-        MT_F(t + h0, x1, f1);
+        mt_eval_f(&md, t + h0, x1, f1);
         for (i = 0; i < n; ++i) fs[i] = (f1[i] - f0[i]) / h0;
         d2 = mt_norm(fs, x, 0, n, rtol, atol);
         d2 = d1 > d2 ? d1 : d2;
         h1 = d2 <= 1e-15 ? (h0 * 1e-3 > 1e-6 ? h0 * 1e-3 : 1e-6) : pow(0.01 / d2, 0.2);
         h = 100.0 * h0 < h1 ? 100.0 * h0 : h1;
     }
-    if (hmax > 0.0 && h > hmax) h = hmax;
 
     while (t < tend) {
         int last = 0;
-        double hg;
+        double hg, t1;
         if (steps + rejected >= max_steps) {
             status = MT_MAX_STEPS;
             goto done;
@@ -239,12 +324,13 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
             status = MT_STEP_TOO_SMALL;
             goto done;
         }
-        cj.arg[0] = &t;
-        cj.arg[1] = x;
-        cj.arg[2] = p;
-        cj.res[0] = jac;
-        cj.res[1] = ft;
-        mt_jac(cj.arg, cj.res, cj.iw, cj.w, 0);
+        md.cj.arg[0] = &t;
+        md.cj.arg[1] = x;
+        md.cj.arg[2] = md.m;
+        md.cj.arg[3] = p;
+        md.cj.res[0] = jac;
+        md.cj.res[1] = ft;
+        mt_jac(md.cj.arg, md.cj.res, md.cj.iw, md.cj.w, 0);
         ++njev;
         hg = 1.0 / (h * mt_gamma);
         for (j = 0; j < n * n; ++j) w[j] = -jac[j];
@@ -268,15 +354,15 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
                 for (j = 0; j < s; ++j)
                     if (as[j] != 0.0)
                         for (i = 0; i < n; ++i) ys[i] += as[j] * ks[(size_t)j * nn + i];
-                MT_F(t + mt_alpha[s] * h, ys, fs);
+                mt_eval_f(&md, t + mt_alpha[s] * h, ys, fs);
                 fi = fs;
             }
             for (i = 0; i < n; ++i) ki[i] = fi[i] + h * mt_g[s] * ft[i];
             if (s > 0) {
                 const double *cs = mt_c + s * (s - 1) / 2;
                 for (j = 0; j < s; ++j) {
-                    double cj_h = cs[j] / h;
-                    for (i = 0; i < n; ++i) ki[i] += cj_h * ks[(size_t)j * nn + i];
+                    double c_h = cs[j] / h;
+                    for (i = 0; i < n; ++i) ki[i] += c_h * ks[(size_t)j * nn + i];
                 }
             }
             mt_lu_solve(w, piv, ki, n);
@@ -303,62 +389,163 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
         fac = err > 0.0 ? 0.9 * pow(err, -0.25) : 6.0;
         if (fac > 6.0) fac = 6.0;
         if (fac < 0.2) fac = 0.2;
-        if (err <= 1.0 || fixed_h > 0.0) {
-            double t1 = last ? tend : t + h;
-            MT_F(t1, x1, f1);
-            if (!mt_all_finite(f1, n)) {
-                status = MT_NOT_FINITE;
-                t = t1;
-                goto done;
-            }
-            /* outputs inside (t, t1]: cubic Hermite between (x, f0) and (x1, f1) */
-            while (k_out < nout && tout[k_out] <= t1) {
-                double th = (tout[k_out] - t) / (t1 - t), th2 = th * th, th3 = th2 * th;
-                double a0 = 2 * th3 - 3 * th2 + 1, b0 = (th3 - 2 * th2 + th) * (t1 - t);
-                double a1 = -2 * th3 + 3 * th2, b1 = (th3 - th2) * (t1 - t);
-                for (i = 0; i < n; ++i) ys[i] = a0 * x[i] + b0 * f0[i] + a1 * x1[i] + b1 * f1[i];
-                MT_OUT(tout[k_out], ys, k_out);
-                ++k_out;
-            }
-            h_last = t1 - t;
-            t = t1;
-            for (i = 0; i < n; ++i) {
-                x[i] = x1[i];
-                f0[i] = f1[i];
-            }
-            ++steps;
-            if (fixed_h > 0.0) {
-                h = fixed_h;
-            } else {
-                if (reject_run && fac > 1.0) fac = 1.0;
-                h *= fac;
-            }
-            reject_run = 0;
-        } else {
+        if (!(err <= 1.0 || fixed_h > 0.0)) {
             ++rejected;
             ++reject_run;
             h *= fac;
+            continue;
         }
+        t1 = last ? tend : t + h;
+        mt_eval_f(&md, t1, x1, f1);
+        if (!mt_all_finite(f1, n)) {
+            status = MT_NOT_FINITE;
+            t = t1;
+            goto done;
+        }
+#if MT_NR > 0
+        {
+            /* an indicator that went from > 0 to <= 0 is an event; find the first */
+            double ta = t, tb = t1, te;
+            int crossed = 0, side = 0, k_ev = -1, round;
+            mt_eval_zero(&md, t1, x1, g1);
+            ++nzero;
+            for (i = 0; i < MT_NR; ++i)
+                if (g0[i] > 0.0 && g1[i] <= 0.0) crossed = 1;
+            if (crossed) {
+                for (i = 0; i < MT_NR; ++i) {
+                    ga[i] = g0[i];
+                    gb[i] = g1[i];
+                }
+                for (round = 0; round < 200 && tb - ta > event_tol; ++round) {
+                    /* secant estimate of the earliest crossing; Illinois halving of the
+                     * retained end's values keeps it from stalling on one side */
+                    double tc = tb;
+                    int any = 0;
+                    for (i = 0; i < MT_NR; ++i)
+                        if (g0[i] > 0.0 && gb[i] <= 0.0 && ga[i] > 0.0) {
+                            double est = ta + (tb - ta) * ga[i] / (ga[i] - gb[i]);
+                            if (est < tc) tc = est;
+                        }
+                    /* an estimate on an end of the bracket is moved half a tolerance
+                     * inside: a root hit exactly (a clock tick) then closes the bracket
+                     * at once instead of by bisection */
+                    if (tc < ta + 0.5 * event_tol) tc = ta + 0.5 * event_tol;
+                    if (tc > tb - 0.5 * event_tol) tc = tb - 0.5 * event_tol;
+                    if (!(tc > ta && tc < tb)) tc = 0.5 * (ta + tb);
+                    mt_hermite(x, f0, x1, f1, t1 - t, (tc - t) / (t1 - t), ys, n);
+                    mt_eval_zero(&md, tc, ys, gc);
+                    ++nzero;
+                    for (i = 0; i < MT_NR; ++i)
+                        if (g0[i] > 0.0 && gc[i] <= 0.0) any = 1;
+                    if (any) {
+                        tb = tc;
+                        for (i = 0; i < MT_NR; ++i) gb[i] = gc[i];
+                        if (side == -1)
+                            for (i = 0; i < MT_NR; ++i) ga[i] *= 0.5;
+                        side = -1;
+                    } else {
+                        ta = tc;
+                        for (i = 0; i < MT_NR; ++i) ga[i] = gc[i];
+                        if (side == 1)
+                            for (i = 0; i < MT_NR; ++i) gb[i] *= 0.5;
+                        side = 1;
+                    }
+                }
+                te = tb;
+                /* outputs before the event's bracket use the step's interpolant; one
+                 * inside it (within event_tol of the event, e.g. at a clock tick) shows
+                 * the state after the event, as the CasADi integrators do */
+                while (k_out < nout && tout[k_out] < ta) {
+                    mt_hermite(x, f0, x1, f1, t1 - t, (tout[k_out] - t) / (t1 - t), ys, n);
+                    mt_eval_out(&md, tout[k_out], ys, y + (size_t)k_out * MT_NY);
+                    ++k_out;
+                }
+                mt_hermite(x, f0, x1, f1, t1 - t, (te - t) / (t1 - t), ys, n);
+                mt_eval_zero(&md, te, ys, gc);
+                ++nzero;
+                for (i = 0; i < MT_NR; ++i)
+                    if (g0[i] > 0.0 && gc[i] <= 0.0) {
+                        k_ev = i;
+                        break;
+                    }
+                if (k_ev < 0) k_ev = 0;   /* not reached: tb always has a crossing */
+                for (i = 0; i < n; ++i) x[i] = ys[i];
+                mt_eval_transition(&md, k_ev, te, x, xpost);
+                ++events;
+                for (i = 0; i < MT_NR; ++i)
+                    if (md.m[MT_NR + i] >= 0.5 * MT_CHATTER_FLAG) {
+                        /* the transition marked a sliding mode: the caller reports it */
+                        status = MT_CHATTERING;
+                        t = te;
+                        goto done;
+                    }
+                same_time = (te - t <= event_tol) ? same_time + 1 : 0;
+                if (same_time > 1000) {
+                    status = MT_ZENO;
+                    t = te;
+                    goto done;
+                }
+                h_last = te - t;
+                t = te;
+                ++steps;
+                mt_eval_f(&md, t, x, f0);
+                if (!mt_all_finite(f0, n)) {
+                    status = MT_NOT_FINITE;
+                    goto done;
+                }
+                mt_eval_zero(&md, t, x, g0);
+                ++nzero;
+                if (fixed_h > 0.0) h = fixed_h;
+                reject_run = 0;
+                continue;
+            }
+            for (i = 0; i < MT_NR; ++i) g0[i] = g1[i];
+        }
+#endif
+        /* outputs inside (t, t1]: cubic Hermite between (x, f0) and (x1, f1) */
+        while (k_out < nout && tout[k_out] <= t1) {
+            mt_hermite(x, f0, x1, f1, t1 - t, (tout[k_out] - t) / (t1 - t), ys, n);
+            mt_eval_out(&md, tout[k_out], ys, y + (size_t)k_out * MT_NY);
+            ++k_out;
+        }
+        h_last = t1 - t;
+        t = t1;
+        for (i = 0; i < n; ++i) {
+            x[i] = x1[i];
+            f0[i] = f1[i];
+        }
+        ++steps;
+        if (fixed_h > 0.0) {
+            h = fixed_h;
+        } else {
+            if (reject_run && fac > 1.0) fac = 1.0;
+            h *= fac;
+        }
+        reject_run = 0;
     }
-    for (it = k_out; it < nout; ++it) MT_OUT(tout[it], x, it);   /* tout beyond tend: none */
+    for (it = k_out; it < nout; ++it) mt_eval_out(&md, tout[it], x, y + (size_t)it * MT_NY);
     k_out = nout;
 
 done:
     for (i = 0; i < n; ++i) xf[i] = x[i];
+    for (i = 0; i < MT_NM; ++i) xf[n + i] = md.m[i];
     info[0] = (double)steps;
     info[1] = (double)rejected;
-    info[2] = (double)nfev;
+    info[2] = (double)md.nfev;
     info[3] = (double)njev;
     info[4] = (double)nlu;
     info[5] = t;
     info[6] = h_last;
     info[7] = (double)k_out;
+    info[8] = (double)events;
+    info[9] = (double)nzero;
     free(mem);
     free(piv);
-    mt_ctx_free(&cf);
-    mt_ctx_free(&cj);
-    mt_ctx_free(&co);
+release:
+    mt_ctx_free(&md.cf);
+    mt_ctx_free(&md.cj);
+    mt_ctx_free(&md.co);
+    mt_ctx_free(&md.cz);
+    mt_ctx_free(&md.ct);
     return status;
-#undef MT_F
-#undef MT_OUT
 }
