@@ -75,8 +75,9 @@ class SolverStats:
     wall_time : float, optional
         Wall-clock time of the simulation, in s.
     compile_time : float or None, optional
-        Wall-clock time of compiling the model for this run, in s; ``None`` when the
-        model was compiled beforehand.
+        Wall-clock time of compiling the model for this run, in s (with
+        ``solver="rodas4"``, building or loading its C library included); ``None`` when
+        nothing was compiled for the run.
     """
 
     solver: str
