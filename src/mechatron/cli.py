@@ -684,6 +684,55 @@ def _demo_profile(d: DemoRun) -> None:
                  right="2345678"))
 
 
+def _demo_speed(d: DemoRun) -> None:
+    """The compiled Rosenbrock solver on the acausal motor (default tolerances, the demo's
+    output grid): agreement with the tight CVODES run (checked) and its time beside CVODES
+    and SciPy's LSODA on the hand-written ODE with the same tolerances and grid (printed,
+    not checked: timings are not assertions)."""
+    from scipy.integrate import solve_ivp
+
+    from mechatron.solvers.native import compiler
+    v = d.variants[0]
+    cm = d.compiled[v]
+    if compiler() is None:
+        d.say("  skipped: no C compiler (cc, gcc or $CC) for solver='rodas4'")
+        return
+    ref = d.results[v]
+    grid = ref.t
+
+    def median_time(fn, n=21):
+        times = []
+        for _ in range(n):
+            t0 = time.perf_counter()
+            out = fn()
+            times.append(time.perf_counter() - t0)
+        return out, float(np.median(times))
+
+    first = mt.simulate(cm, d.t_stop, solver="rodas4", t_out=grid)
+    fast, t_rodas = median_time(lambda: mt.simulate(cm, d.t_stop, solver="rodas4",
+                                                    t_out=grid))
+    _, t_cvodes = median_time(lambda: mt.simulate(cm, d.t_stop, solver="cvodes",
+                                                  t_out=grid))
+    P = d.entry.values()
+    A = np.array([[-P["R"] / P["L"], -P["k"] / P["L"]], [P["k"] / P["J"], -P["B"] / P["J"]]])
+    b = np.array([P["V"] / P["L"], 0.0])
+    _, t_lsoda = median_time(lambda: solve_ivp(lambda t, y: A @ y + b, (0.0, d.t_stop),
+                                               np.zeros(2), method="LSODA", t_eval=grid,
+                                               rtol=1e-6, atol=1e-8))
+    d.say(f"  C library ready in {_duration(first.stats.compile_time or 0.0)} (built once, "
+          "then loaded from the cache)")
+    d.say(f"  one run: rodas4 {t_rodas * 1e3:.3f} ms, CVODES {t_cvodes * 1e3:.3f} ms, "
+          f"SciPy LSODA {t_lsoda * 1e3:.3f} ms  (LSODA / rodas4 = "
+          f"{t_lsoda / t_rodas:.0f}x; timings vary with the machine)")
+    for label in ("w", "i"):
+        path = d.path(v, label)
+        dev, rel = _max_deviation(fast[path], ref[path])
+        c = d.check(f"rodas4 vs CVODES: {label}", rel, 1e-5)
+        d.say(f"  {label}: max |rodas4 (rtol 1e-6) - tight CVODES| = {dev:.3e} "
+              f"{d.entry.output_units[label]}, {rel:.3e} of the peak  "
+              f"[{'ok' if c.ok else 'FAILED'}, limit {c.limit:g}]")
+
+
 def _demo_fixed_step(d: DemoRun) -> None:
     v = d.variants[0]
     d.fixed = fixed = mt.simulate(d.compiled[v], d.t_stop, solver="rk4", dt=d.rk4_dt)
@@ -854,6 +903,8 @@ DEMO_STEPS: list[DemoStep] = [
     DemoStep("Agreement of the two variants", _demo_agreement),
     DemoStep("Analytic steady state versus simulation", _demo_analytic),
     DemoStep("Solver profile", _demo_profile),
+    DemoStep("Speed: the model and a Rosenbrock solver compiled to C (solver='rodas4')",
+             _demo_speed),
     DemoStep("Fixed-step RK4 (the step function of code generation and HIL)",
              _demo_fixed_step),
     DemoStep("Plots and simulation logs", _demo_files),
