@@ -156,33 +156,32 @@ typedef struct {
     long nfev;
 } mt_model;
 
+/* A generated function of (t, x, m, p) -> out (and out2 when it has two results). */
+typedef int (*mt_fn)(const casadi_real **, casadi_real **, casadi_int *, casadi_real *, int);
+
+static void mt_call(mt_ctx *c, mt_fn fn, const mt_model *md, double t, const double *x,
+                    double *out, double *out2) {
+    c->arg[0] = &t;
+    c->arg[1] = x;
+    c->arg[2] = md->m;
+    c->arg[3] = md->p;
+    c->res[0] = out;
+    c->res[1] = out2;
+    fn(c->arg, c->res, c->iw, c->w, 0);
+}
+
 static void mt_eval_f(mt_model *md, double t, const double *x, double *out) {
-    md->cf.arg[0] = &t;
-    md->cf.arg[1] = x;
-    md->cf.arg[2] = md->m;
-    md->cf.arg[3] = md->p;
-    md->cf.res[0] = out;
-    mt_f(md->cf.arg, md->cf.res, md->cf.iw, md->cf.w, 0);
+    mt_call(&md->cf, mt_f, md, t, x, out, 0);
     ++md->nfev;
 }
 
 static void mt_eval_out(mt_model *md, double t, const double *x, double *out) {
-    md->co.arg[0] = &t;
-    md->co.arg[1] = x;
-    md->co.arg[2] = md->m;
-    md->co.arg[3] = md->p;
-    md->co.res[0] = out;
-    mt_out(md->co.arg, md->co.res, md->co.iw, md->co.w, 0);
+    mt_call(&md->co, mt_out, md, t, x, out, 0);
 }
 
 #if MT_NR > 0
 static void mt_eval_zero(mt_model *md, double t, const double *x, double *g) {
-    md->cz.arg[0] = &t;
-    md->cz.arg[1] = x;
-    md->cz.arg[2] = md->m;
-    md->cz.arg[3] = md->p;
-    md->cz.res[0] = g;
-    mt_zero(md->cz.arg, md->cz.res, md->cz.iw, md->cz.w, 0);
+    mt_call(&md->cz, mt_zero, md, t, x, g, 0);
 }
 
 /* The transition of relation k at (t, x): x and the modes/counters/times in place. */
@@ -238,6 +237,10 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
 
     memset(&md, 0, sizeof md);
     md.p = p;
+#if MT_NR == 0
+    (void)event_tol;          /* no relations: nothing to locate */
+    (void)same_time;
+#endif
     if (nout < 1) return MT_OK;
     if (mt_ctx_init(&md.cf, mt_f_work) || mt_ctx_init(&md.cj, mt_jac_work) ||
         mt_ctx_init(&md.co, mt_out_work)
@@ -274,6 +277,7 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
     gc = gb + nr;
     md.m = gc + nr;                     /* 3 nr (+1) values */
     xpost = md.m + 3 * nr + 1;          /* nn + 3 nr values */
+    (void)xpost;
 
     t = tout[0];
     tend = tout[nout - 1];
@@ -324,13 +328,7 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
             status = MT_STEP_TOO_SMALL;
             goto done;
         }
-        md.cj.arg[0] = &t;
-        md.cj.arg[1] = x;
-        md.cj.arg[2] = md.m;
-        md.cj.arg[3] = p;
-        md.cj.res[0] = jac;
-        md.cj.res[1] = ft;
-        mt_jac(md.cj.arg, md.cj.res, md.cj.iw, md.cj.w, 0);
+        mt_call(&md.cj, mt_jac, &md, t, x, jac, ft);
         ++njev;
         hg = 1.0 / (h * mt_gamma);
         for (j = 0; j < n * n; ++j) w[j] = -jac[j];
