@@ -209,6 +209,13 @@ def template_values(prep: Prepared) -> dict:
         ydecl.append(render("c/output_getter.h.in", **v).rstrip())
         ydef.append(render("c/output_getter.c.in", **v).rstrip())
     bounds = [_parameter_bounds(cm, i) for i in range(npar)]
+    inputs = []
+    for k, ident in enumerate(unique_identifiers(n.upper() for n in cm.input_names)):
+        doc = f": {cm.input_docs[k]}" if cm.input_docs[k] else ""
+        comment = f"{cm.input_names[k]} [{cm.input_units[k] or '1'}]{doc}"
+        comment = comment.replace("*/", "* /")
+        inputs.append(f"#define {prep.name.upper()}_INPUT_{ident} {cm.input_index[k]}"
+                      f"    /* {comment} */")
     return dict(
         common, model=cm.name, version=mechatron.__version__, solver=prep.solver,
         dt=c_double(prep.dt), t0=c_double(prep.t0), t_stop=c_double(prep.t_stop),
@@ -224,7 +231,8 @@ def template_values(prep: Prepared) -> dict:
         output_names=c_array(c_string(n) for n in cm.names),
         parameter_declarations="\n".join(pdecl), parameter_definitions="\n".join(pdef),
         output_declarations="\n".join(ydecl), output_definitions="\n".join(ydef),
-        csv_header=c_string(_header_line(cm.names)))
+        csv_header=c_string(_header_line(cm.names)),
+        ninputs=len(cm.input_names), input_defines="".join(i + "\n" for i in inputs))
 
 
 def generate_c(model, out_dir, *, solver: str = "rk4", dt: float, iterations: int = 3,

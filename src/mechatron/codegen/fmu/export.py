@@ -7,16 +7,30 @@ fixed-step run to rounding. Model-exchange FMUs (FMI 2.0) give the importer the 
 derivatives ``der(x)`` and the logged variables; the importer integrates.
 
 Variables: every parameter (``causality="parameter"``, tunable, start = default), every
-logged variable by instance path (``causality="output"``); model exchange adds the
-continuous states (as outputs when they are logged, else local) and their derivatives.
-The FMU holds its C sources (``sources/``; FMI 3.0 also ``buildDescription.xml``) and a
-shared library for the build platform, compiled at export and linked only against the C
-library and libm.
+external input of the model (``causality="input"``, see below), every other logged
+variable by instance path (``causality="output"``); model exchange adds the continuous
+states (as outputs when they are logged, else local) and their derivatives. The FMU holds
+its C sources (``sources/``; FMI 3.0 also ``buildDescription.xml``) and a shared library
+for the build platform, compiled at export and linked only against the C library and libm.
 
-Limitations: no inputs (drive a model with source blocks or parameters); model exchange
-of models with event relations is refused (export co-simulation, which handles their
-modes as the fixed-step solver does); FMU states, directional derivatives and FMI 3.0
-model exchange are not provided.
+Inputs: the signal inputs of the model's root component (``CompiledModel.input_names``,
+:mod:`mechatron.solvers.inputs`) are FMI inputs, ``variability="continuous"``, with their
+unit, description and a start value (the declared start, 0 when there is none: FMI
+requires one; ``params={...}`` overrides it). Each is a slot of the parameter vector ``p``
+of the generated C, so ``fmi2SetReal``/``fmi3SetFloat64`` write that slot at any time.
+Co-simulation holds the value set before ``doStep`` over the whole communication step
+(zero-order hold, as Mechatron's fixed-step run holds an input over each solver step): with
+a communication step equal to the solver step, an FMU fed with a table's values at the
+communication points reproduces ``mt.simulate(..., solver=, dt=, inputs={...})`` to
+rounding. Model exchange evaluates ``der(x)`` with the input last set, so an importer that
+interpolates the input continuously matches a variable-step run. The logged copy of the
+input (equation ``u == p_u``) is the input variable itself, not a second output; outputs
+list no dependencies (they may depend on every input) and the FMU cannot interpolate
+inputs (``canInterpolateInputs`` is false).
+
+Limitations: model exchange of models with event relations is refused (export
+co-simulation, which handles their modes as the fixed-step solver does); FMU states,
+directional derivatives, input derivatives and FMI 3.0 model exchange are not provided.
 """
 
 from __future__ import annotations
@@ -31,6 +45,8 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
+import numpy as np
+
 import mechatron
 from mechatron.codegen._common import CodegenError, c_array, render
 from mechatron.codegen.c.generator import Prepared, prepare, template_values, write_c
@@ -41,7 +57,9 @@ __all__ = ["export_fmu", "fmi_platform", "FMU_C_FLAGS"]
 FMU_C_FLAGS = ["-std=c99", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-pedantic",
                "-Werror", "-ffp-contract=off"]
 
-_KIND = {"parameter": 0, "output": 1, "state": 2, "derivative": 3, "time": 4}
+#: Kind of each value reference in the C wrapper; an input is a slot of ``p`` and is read
+#: and written as a parameter.
+_KIND = {"parameter": 0, "input": 0, "output": 1, "state": 2, "derivative": 3, "time": 4}
 
 
 def fmi_platform(fmi: int) -> tuple[str, str]:
@@ -68,14 +86,26 @@ def _variables(prep: Prepared, fmi: int, kind: str) -> list[dict]:
     if fmi == 3:
         out.append(dict(name="time", causality="independent", variability="continuous",
                         kind="time", index=0, unit="s"))
+    slots = set(cm.input_index)
     for i, name in enumerate(cm.param_names):
+        if i in slots:
+            continue
         out.append(dict(name=name, causality="parameter", variability="tunable",
                         initial="exact", start=float(prep.p[i]), kind="parameter", index=i,
                         unit=cm.param_units[i], description=None))
+    for k, (name, slot) in enumerate(zip(cm.input_names, cm.input_index)):
+        start = float(prep.p[slot])
+        out.append(dict(name=name, causality="input", variability="continuous",
+                        start=start if np.isfinite(start) else 0.0, kind="input",
+                        index=int(slot), unit=cm.input_units[k],
+                        description=cm.input_docs[k] or None))
+    inputs = set(cm.input_names)
     logged = {n: j for j, n in enumerate(cm.names)}
     me = kind == "me"
     states = set(cm.state_names) if me else set()
     for j, name in enumerate(cm.names):
+        if name in inputs:       # its logged copy (u == p_u) is the input variable
+            continue
         v = dict(name=name, causality="output", variability="continuous", kind="output",
                  index=j, unit=cm.units[j], description=cm.docs[j] or None)
         if name in states:
@@ -285,7 +315,10 @@ def export_fmu(model, path, *, fmi: int = 2, kind: str = "cs", solver: str = "rk
     return {"path": str(path), "fmi": f"{fmi}.0", "kind": kind, "guid": guid,
             "solver": prep.solver if kind == "cs" else None,
             "dt": prep.dt, "iterations": prep.iterations, "platform": binaries,
-            "variables": len(variables), "parameters": len(cm.param_names),
-            "outputs": len(cm.names), "states": cm.nx,
+            "variables": len(variables),
+            "parameters": len(cm.param_names) - len(cm.input_names),
+            "inputs": list(cm.input_names),
+            "outputs": len(cm.names) - len(set(cm.input_names) & set(cm.names)),
+            "states": cm.nx,
             "sources": [f"sources/{s}" for s in sources]
             + (["sources/buildDescription.xml"] if fmi == 3 else [])}
