@@ -144,7 +144,7 @@ def native_library(cm: CompiledModel) -> _Library:
             "solver='auto'.", path=cm.name)
     source = _source(cm)
     key = hashlib.sha1((source + " ".join(FLAGS) + cc).encode()).hexdigest()[:20]
-    folder = cache_dir() / "rodas4"
+    folder = _writable(cache_dir() / "rodas4")
     path = folder / f"{_slug(cm.name)}_{key}.so"
     if not path.exists():
         try:
@@ -168,6 +168,21 @@ def native_library(cm: CompiledModel) -> _Library:
                 "solver='auto'.", path=cm.name) from None
     lib = cm._cache["native_rodas4"] = _Library(path)
     return lib
+
+
+def _writable(folder: Path) -> Path:
+    """``folder``, created if needed; a folder in the system's temporary directory when
+    it cannot be written (a read-only home on a CI machine)."""
+    user = getattr(os, "getuid", lambda: 0)()
+    fallback = Path(tempfile.gettempdir()) / f"mechatron-{user}" / folder.name
+    for candidate in (folder, fallback):
+        try:
+            candidate.mkdir(parents=True, exist_ok=True)
+            if os.access(candidate, os.W_OK):
+                return candidate
+        except OSError:
+            continue
+    return folder        # the build below then fails with a message naming it
 
 
 def _slug(name: str) -> str:
