@@ -39,8 +39,8 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     solver : str
         ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs; for models with events rk45,
         or Rosenbrock for DAEs), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``,
-        ``"rodas4"`` (the model and a Rosenbrock integrator compiled to one C library:
-        the fastest for small ODE models without events, see
+        ``"rodas4"`` (the model, a Rosenbrock integrator and its event handling compiled
+        to one C library: the fastest for ODE models up to a few hundred states, see
         :mod:`mechatron.solvers.native`), or a fixed-step method: ``"euler"``,
         ``"heun"``, ``"rk4"``, ``"backward_euler"``, ``"trapezoidal"``, ``"ode14x"``.
     dt : float, optional
@@ -82,6 +82,10 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     ext = resolve_inputs(cm, inputs, params, t0, t_stop)   # external inputs, or None
     if ext is not None:
         p = ext.apply(p)
+    if solver == "rodas4" and ext is not None and ext.drive:
+        raise SimulationError(f"model '{cm.name}': solver 'rodas4' takes constant "
+                              "inputs only; for tables or functions of time use "
+                              "solver='auto' (or 'cvodes', 'rk45').", path=cm.name)
     if solver == "rodas4" and "native_rodas4" not in cm._cache:
         # the model's C library is built (or loaded from the disk cache) once: that is
         # compilation, not simulation
@@ -101,10 +105,6 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
                             rhs_evals=n * _stages(solver), jac_evals=0)
     elif solver == "rodas4":
-        if ext is not None and ext.drive:
-            raise SimulationError(f"model '{cm.name}': solver 'rodas4' takes constant "
-                                  "inputs only; for tables or functions of time use "
-                                  "solver='auto' (or 'cvodes', 'rk45').", path=cm.name)
         grid = _grid(cm, t0, t_stop, t_out)
         Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
                                      max_step=_max_step(cm, p, grid, max_step))
