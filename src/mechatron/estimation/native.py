@@ -11,15 +11,9 @@ function is returned unchanged: results are the same, only slower.
 
 from __future__ import annotations
 
-import hashlib
-import os
-import subprocess
-import tempfile
-from pathlib import Path
-
 import casadi as ca
 
-from mechatron.solvers.native import cache_dir, compiler
+from mechatron.solvers.native import BuildError, build_library, cache_dir, compiler
 
 __all__ = ["native", "compiler", "cache_dir"]
 
@@ -35,19 +29,7 @@ def native(fn: ca.Function) -> ca.Function:
     try:
         cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
         cg.add(fn)
-        source = cg.dump()
-        key = hashlib.sha1((source + " ".join(FLAGS) + cc).encode()).hexdigest()[:16]
-        folder = cache_dir() / "jit"
-        folder.mkdir(parents=True, exist_ok=True)
-        lib = folder / f"{name}_{key}.so"
-        if not lib.exists():
-            with tempfile.TemporaryDirectory(dir=folder) as tmp:
-                src = Path(tmp) / f"{name}.c"
-                src.write_text(source)
-                out = Path(tmp) / lib.name
-                subprocess.run([cc, *FLAGS, str(src), "-o", str(out), "-lm"], check=True,
-                               capture_output=True, timeout=300)
-                os.replace(out, lib)          # atomic: parallel runs never see half a file
+        lib = build_library(cg.dump(), name, "jit", FLAGS, cc)
         return ca.external(name, str(lib))
-    except (OSError, subprocess.SubprocessError, RuntimeError):
+    except (BuildError, RuntimeError):
         return fn

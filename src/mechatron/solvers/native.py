@@ -42,7 +42,8 @@ from mechatron.compiler.compiled import CompiledModel
 from mechatron.compiler.events import CHATTER_FLAG
 from mechatron.errors import SimulationError
 
-__all__ = ["integrate_native", "native_library", "compiler", "cache_dir", "MAX_STATES"]
+__all__ = ["integrate_native", "native_library", "build_library", "BuildError",
+           "compiler", "cache_dir", "MAX_STATES"]
 
 #: Largest state count the dense-Jacobian solver accepts (beyond it CVODES is faster).
 MAX_STATES = 400
@@ -142,32 +143,45 @@ def native_library(cm: CompiledModel) -> _Library:
             f"model '{cm.name}': solver 'rodas4' compiles the model to C and no C compiler "
             "was found (cc, gcc, or $CC). Install one (Debian: apt-get install gcc) or use "
             "solver='auto'.", path=cm.name)
-    source = _source(cm)
-    key = hashlib.sha1((source + " ".join(FLAGS) + cc).encode()).hexdigest()[:20]
-    folder = _writable(cache_dir() / "rodas4")
-    path = folder / f"{_slug(cm.name)}_{key}.so"
-    if not path.exists():
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            with tempfile.TemporaryDirectory(dir=folder) as tmp:
-                src = Path(tmp) / "model.c"
-                src.write_text(source)
-                out = Path(tmp) / path.name
-                proc = subprocess.run([cc, *FLAGS, str(src), "-o", str(out), "-lm"],
-                                      capture_output=True, text=True, timeout=600)
-                if proc.returncode != 0:
-                    tail = "\n".join(proc.stderr.strip().splitlines()[-6:])
-                    raise SimulationError(
-                        f"model '{cm.name}': solver 'rodas4': compiling the generated C "
-                        f"failed ({cc}): {tail}. Use solver='auto'.", path=cm.name)
-                os.replace(out, path)       # atomic: parallel runs never see half a file
-        except (OSError, subprocess.SubprocessError) as exc:
-            raise SimulationError(
-                f"model '{cm.name}': solver 'rodas4' could not build its library in "
-                f"{folder} ({exc}). Set MECHATRON_CACHE to a writable folder, or use "
-                "solver='auto'.", path=cm.name) from None
+    try:
+        path = build_library(_source(cm), _slug(cm.name), "rodas4", FLAGS, cc)
+    except BuildError as exc:
+        raise SimulationError(f"model '{cm.name}': solver 'rodas4': {exc}. Set "
+                              "MECHATRON_CACHE to a writable folder if that is the cause, "
+                              "or use solver='auto'.", path=cm.name) from None
     lib = cm._cache["native_rodas4"] = _Library(path)
     return lib
+
+
+class BuildError(RuntimeError):
+    """Compiling generated C into a shared library failed (the message says why)."""
+
+
+def build_library(source: str, name: str, kind: str, flags: tuple[str, ...],
+                  cc: str) -> Path:
+    """Compile ``source`` into a shared library in the cache folder ``kind`` and return
+    its path; a library of the same source, flags and compiler is reused. The file name
+    holds a hash of them, and the library is moved into place atomically, so parallel
+    runs never see half a file. Raises :class:`BuildError`."""
+    key = hashlib.sha1((source + " ".join(flags) + cc).encode()).hexdigest()[:20]
+    folder = _writable(cache_dir() / kind)
+    path = folder / f"{name}_{key}.so"
+    if path.exists():
+        return path
+    try:
+        with tempfile.TemporaryDirectory(dir=folder) as tmp:
+            src = Path(tmp) / f"{name}.c"
+            src.write_text(source)
+            out = Path(tmp) / path.name
+            proc = subprocess.run([cc, *flags, str(src), "-o", str(out), "-lm"],
+                                  capture_output=True, text=True, timeout=600)
+            if proc.returncode != 0:
+                tail = "\n".join(proc.stderr.strip().splitlines()[-6:])
+                raise BuildError(f"compiling the generated C failed ({cc}): {tail}")
+            os.replace(out, path)
+    except (OSError, subprocess.SubprocessError) as exc:
+        raise BuildError(f"could not build a library in {folder} ({exc})") from None
+    return path
 
 
 def _writable(folder: Path) -> Path:
