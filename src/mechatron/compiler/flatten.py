@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
+from mechatron.core.connections import (connection_sets, inside_connected, is_driver,
+                                        port_key)
 from mechatron.core.context import BuildContext
 from mechatron.core.declarations import (Across, Input, Output, Parameter, Start, Through,
                                          Variable)
@@ -291,7 +293,7 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
             for k, item in enumerate(_as_equations(items)):
                 if isinstance(item, Connect):
-                    connects.append((item, where))
+                    connects.append((item, el))
                     continue
                 if isinstance(item, EventAction):
                     flat.events.append((item, el.path))
@@ -374,12 +376,6 @@ class _UnionFind:
             self.parent[rb] = ra
 
 
-def _port_path(p) -> str:
-    if isinstance(p, SignalRef):
-        return p.path()
-    return p.path
-
-
 def _resolve(flat: FlatModel, port, sym_owner):
     """A Connector, a SignalRef, or a bound signal symbol -> Connector or SignalRef."""
     if isinstance(port, (Connector, SignalRef)):
@@ -392,15 +388,17 @@ def _resolve(flat: FlatModel, port, sym_owner):
 
 
 def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
+    """Connection sets over the whole tree, with inside and outside connectors
+    (:mod:`mechatron.core.connections`), turned into aliases and flow sums."""
     sym_owner: dict[str, SignalRef] = {}
     for el in elements:
         for key, decl in type(el)._declarations.items():
             if isinstance(decl, (Input, Output)):
                 sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
-    uf = _UnionFind()
-    ports: dict[int, object] = {}
-    tried: set[int] = set()   # ports of a failed connect: not reported again as unconnected
-    for con, where in connects:
+    joined = []
+    tried: set[tuple] = set()  # ports of a failed connect: not reported again as unconnected
+    for con, writer in connects:
+        where = writer.path or flat.name
         resolved = []
         for p in con.ports:
             r = _resolve(flat, p, sym_owner)
@@ -409,45 +407,60 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
                                 "such as r1.p or a signal such as src.y.")
                 continue
             resolved.append(r)
+        ok = [resolved[0]] if resolved else []
         for a, b in zip(resolved, resolved[1:]):
             msg = _compatible(a, b)
             if msg:
                 problems.add(ConnectError, msg)
-                tried.update((_key(a), _key(b)))
+                tried.update((port_key(a), port_key(b)))
                 continue
-            ka = _key(a)
-            kb = _key(b)
-            ports[ka], ports[kb] = a, b
-            uf.union(ka, kb)
-    groups: dict[int, list] = {}
-    for k, p in ports.items():
-        groups.setdefault(uf.find(k), []).append(p)
-    connected: set[int] = set(ports) | tried
-    for group in groups.values():
-        group.sort(key=_port_path)
-        flat.connection_sets.append([_set_member(p) for p in group])
-        if isinstance(group[0], SignalRef):
-            _signal_set(flat, group, problems, model)
+            ok.append(b)
+        if len(ok) > 1:
+            joined.append((writer, ok))
+    sets = connection_sets(joined)
+    for cset in sets:
+        flat.connection_sets.append([_set_member(m) for m in cset.members])
+        if cset.is_signal:
+            _signal_set(flat, cset, problems, model)
         else:
-            _physical_set(flat, group)
+            _physical_set(flat, cset)
+    connected = inside_connected(sets) | tried
+    wired_inside = {port_key(m.port) for s in sets for m in s.members if m.outside}
     for el in elements:
-        if isinstance(el, Connector) and id(el) not in connected and el._parent is not model:
+        if isinstance(el, Connector) and port_key(el) not in connected:
+            if el._parent is model or port_key(el) in wired_inside:
+                # a port of the model, or of a subsystem wired to its parts, left open
+                # outside: nothing flows through it
+                _open_port(flat, el)
+                continue
             problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
                             "or remove the component. "
                             f"{_hint(el)}".rstrip())
         if isinstance(el, Component):
             for key, decl in type(el)._declarations.items():
-                if isinstance(decl, Input) and _sigkey(el, key) not in connected \
-                        and el is not model:   # the root's inputs are external inputs
+                if isinstance(decl, Input) and port_key(SignalRef(el, key)) not in \
+                        connected and el is not model:  # the root's: external inputs
                     problems.append(f"signal input '{_join(el.path, key)}' is not connected. "
                                     "Connect a source, e.g. blocks.Constant.")
-    _check_references(flat, model, elements, uf, ports, problems)
+    _check_references(flat, model, elements, sets, problems)
 
 
-def _set_member(p) -> tuple:
-    if isinstance(p, SignalRef):
-        return (_port_path(p), SIGNAL, isinstance(p.declaration, Output))
-    return (_port_path(p), type(p).domain, False)
+def _open_port(flat: FlatModel, port: Connector) -> None:
+    """A port of the model itself or of a subsystem, which nothing outside connects: its
+    through variables are zero (an open terminal), as for an unconnected Modelica
+    connector. A library part's open port stays an error: it is almost always a
+    forgotten wire."""
+    for t in type(port).through_names():
+        name = f"{port.path}.{t}"
+        flat.equations.append(FlatEquation(flat.variables[name].sym,
+                                           f"{name} == 0 (port '{port.path}' is open "
+                                           "outside)", port._parent.path))
+
+
+def _set_member(m) -> tuple:
+    if isinstance(m.port, SignalRef):
+        return (m.path, SIGNAL, is_driver(m))
+    return (m.path, type(m.port).domain, False)
 
 
 def _join(a, b):
@@ -459,14 +472,6 @@ def _hint(port: Connector) -> str:
         if isinstance(decl, Across) and decl.hint:
             return decl.hint
     return ""
-
-
-def _key(p) -> int:
-    return _sigkey(p.owner, p.name) if isinstance(p, SignalRef) else id(p)
-
-
-def _sigkey(owner, name) -> int:
-    return hash((id(owner), name)) & 0x7FFFFFFFFFFFFFF | 1 << 62
 
 
 def _compatible(a, b) -> str:
@@ -485,37 +490,45 @@ def _compatible(a, b) -> str:
     return ""
 
 
-def _signal_set(flat: FlatModel, group: list[SignalRef], problems, model=None) -> None:
-    # an external input (a signal Input of the root component) drives its set
-    outputs = [g for g in group if isinstance(g.declaration, Output)
-               or (g.owner is model and isinstance(g.declaration, Input))]
-    paths = ", ".join(g.path() for g in group)
+def _signal_set(flat: FlatModel, cset, problems, model) -> None:
+    # driven by a part's output, or by the writing component's own input (the root's own
+    # inputs are the model's external inputs)
+    outputs = [m for m in cset.members if is_driver(m)]
+    paths = ", ".join(m.path for m in cset.members)
     if not outputs:
         problems.append(f"signals {paths} are connected without an output to drive them. "
                         "Connect a source or a block output.")
         return
     if len(outputs) > 1:
-        external = any(isinstance(o.declaration, Input) for o in outputs)
-        problems.append(f"signal outputs {', '.join(o.path() for o in outputs)} are "
+        own = [o for o in outputs if isinstance(o.port.declaration, Input)]
+        note = "."
+        if own and own[0].port.owner is model:
+            note = (" (an input of the model's root component is an external input: it "
+                    "drives what it is connected to).")
+        elif own:
+            note = (f" ('{own[0].path}' is an input of the subsystem that connects it: it "
+                    "drives what it is connected to inside).")
+        problems.append(f"signal outputs {', '.join(o.path for o in outputs)} are "
                         "connected together; an input can be driven by one output only"
-                        + (" (an input of the model's root component is an external "
-                           "input: it drives what it is connected to)." if external
-                           else "."))
+                        + note)
         return
-    src = outputs[0].path()
-    unit = outputs[0].declaration.unit
-    for g in group:
-        if g is not outputs[0]:
-            if not _units_compatible(unit, g.declaration.unit):
-                problems.add(UnitError,
-                             f"cannot connect signal '{src}' ({unit}) to '{g.path()}' "
-                             f"({g.declaration.unit}): the units have different "
-                             f"dimensions ({dimensionality(unit)} vs "
-                             f"{dimensionality(g.declaration.unit)}). Convert with a "
-                             "physical_signals.PSGain with units, or pass a plain "
-                             "signal through PhysicalToSignal/SignalToPhysical.")
-                continue
-            flat.aliases.append((g.path(), src, 1.0, f"connect({src}, {g.path()})"))
+    driver = outputs[0]
+    src = driver.path
+    unit = driver.port.declaration.unit
+    for m in cset.members:
+        if m is driver or m.path == src:
+            continue
+        g = m.port
+        if not _units_compatible(unit, g.declaration.unit):
+            problems.add(UnitError,
+                         f"cannot connect signal '{src}' ({unit}) to '{m.path}' "
+                         f"({g.declaration.unit}): the units have different "
+                         f"dimensions ({dimensionality(unit)} vs "
+                         f"{dimensionality(g.declaration.unit)}). Convert with a "
+                         "physical_signals.PSGain with units, or pass a plain "
+                         "signal through PhysicalToSignal/SignalToPhysical.")
+            continue
+        flat.aliases.append((m.path, src, 1.0, f"connect({src}, {m.path})"))
 
 
 def _units_compatible(a: str, b: str) -> bool:
@@ -525,40 +538,52 @@ def _units_compatible(a: str, b: str) -> bool:
     return not da or not db or da == db
 
 
-def _physical_set(flat: FlatModel, group: list[Connector]) -> None:
-    names = ", ".join(p.path for p in group)
-    origin = f"connect({names})"
-    cls = type(group[0])
-    first = group[0].path
+def _physical_set(flat: FlatModel, cset) -> None:
+    members = cset.members
+    origin = "connect(" + ", ".join(m.path for m in members) + ")"
+    cls = type(members[0].port)
+    first = members[0]
+    ports = [m for m in members if m.port is not first.port]  # a port is one node
     for a in cls.across_names():
-        for p in group[1:]:
-            flat.aliases.append((f"{p.path}.{a}", f"{first}.{a}", 1.0, origin))
+        for m in ports:
+            flat.aliases.append((f"{m.path}.{a}", f"{first.path}.{a}", 1.0, origin))
     for t in cls.through_names():
-        if len(group) == 2:
-            flat.aliases.append((f"{group[1].path}.{t}", f"{first}.{t}", -1.0, origin))
+        if len(members) == 2 and ports:
+            # first.sign * first.t + m.sign * m.t == 0
+            m = ports[0]
+            flat.aliases.append((f"{m.path}.{t}", f"{first.path}.{t}",
+                                 -first.sign * m.sign, origin))
         else:
-            total = sum((flat.variables[f"{p.path}.{t}"].sym for p in group[1:]),
-                        flat.variables[f"{first}.{t}"].sym)
+            total = sum((m.sign * flat.variables[f"{m.path}.{t}"].sym for m in members[1:]),
+                        first.sign * flat.variables[f"{first.path}.{t}"].sym)
             flat.equations.append(FlatEquation(total, f"{origin}: sum of {t} == 0"))
 
 
-def _check_references(flat, model, elements, uf: _UnionFind, ports, problems) -> None:
-    """Every network of a domain that needs a reference must contain one."""
+def _check_references(flat, model, elements, sets, problems) -> None:
+    """Every network of a domain that needs a reference must contain one. A network joins
+    the ports of each connection set (a subsystem's port is one node inside and outside)
+    and the ports of one domain on each component."""
     net = _UnionFind()
-    members: dict[int, list[Connector]] = {}
+    for cset in sets:
+        if cset.is_signal:
+            continue
+        ids = [id(m.port) for m in cset.members]
+        for i in ids[1:]:
+            net.union(ids[0], i)
     for el in elements:
         if not isinstance(el, Component):
             continue
         by_domain: dict[object, list[int]] = {}
         for port in el.ports.values():
-            root = uf.find(id(port))
-            by_domain.setdefault(type(port).domain, []).append(root)
-        for roots in by_domain.values():
-            for r in roots[1:]:
-                net.union(roots[0], r)
-    for k, p in ports.items():
-        if isinstance(p, Connector):
-            members.setdefault(net.find(uf.find(k)), []).append(p)
+            by_domain.setdefault(type(port).domain, []).append(id(port))
+        for ids in by_domain.values():
+            for i in ids[1:]:
+                net.union(ids[0], i)
+    members: dict[int, list[Connector]] = {}
+    for cset in sets:
+        for m in cset.members:
+            if isinstance(m.port, Connector):
+                members.setdefault(net.find(id(m.port)), []).append(m.port)
     for root, plist in members.items():
         domain = type(plist[0]).domain
         if domain is None or not domain.needs_reference:

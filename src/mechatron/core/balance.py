@@ -15,8 +15,8 @@ they assign that no equation differentiates (a discrete state, see
 :mod:`mechatron.core.events`); re-initializing a continuous state adds none.
 Connections inside a composite generate, per connection set of ``n`` physical ports,
 ``(n - 1)`` equalities of each across variable and one sum of each through variable
-(Modelica's rule: the component's own connectors enter that sum with a minus sign, which
-does not change the count); a through variable of a sub-component's connector that no
+(Modelica's rule: the component's own connectors enter that sum with a minus sign; sets
+are built by :mod:`mechatron.core.connections`, as the compiler builds them); a through variable of a sub-component's connector that no
 ``connect`` touches gets the equation ``through = 0``. A signal set of ``n`` signals gives
 ``n - 1`` equalities.
 
@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
+from mechatron.core.connections import connection_sets, inside_connected, port_key
 from mechatron.core.context import BuildContext
 from mechatron.core.declarations import Input, Output, Parameter, Through
 from mechatron.errors import ModelError
@@ -213,7 +214,7 @@ def _count_equations(elements, report, ctx) -> list[Connect]:
                 continue
             for j, item in enumerate(items):
                 if isinstance(item, Connect):
-                    connects.append(item)
+                    connects.append((el, item))
                 elif _is_action(item):
                     for var, _ in list(item.outputs) + list(item.updates):
                         var = ca.SX(var)
@@ -239,47 +240,31 @@ def _count_equations(elements, report, ctx) -> list[Connect]:
 
 
 def _count_connections(root, elements, connects, owner_of, report) -> None:
-    parent: dict[object, object] = {}
-
-    def find(a):
-        parent.setdefault(a, a)
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    members: dict[object, object] = {}
-    for con in connects:
-        keys = []
+    joined = []
+    for writer, con in connects:
+        ports = []
         for p in con.ports:
-            if isinstance(p, Connector):
-                key = ("port", id(p))
-            elif isinstance(p, SignalRef):
-                key = ("signal", id(p.owner), p.name)
+            if isinstance(p, (Connector, SignalRef)):
+                ports.append(p)
             elif isinstance(p, ca.SX) and p.is_scalar() and p.is_symbolic() \
                     and p.name() in owner_of:
-                el, name = owner_of[p.name()]
-                key, p = ("signal", id(el), name), SignalRef(el, name)
+                ports.append(SignalRef(*owner_of[p.name()]))
             else:
                 report.problems.append(f"connect() takes ports or signals, got {p!r}")
-                continue
-            members[key] = p
-            keys.append(key)
-        for a, b in zip(keys, keys[1:]):
-            parent[find(b)] = find(a)
-    groups: dict[object, list] = {}
-    for key, p in members.items():
-        groups.setdefault(find(key), []).append(p)
-    for group in groups.values():
-        if isinstance(group[0], SignalRef):
-            report.equations += len(group) - 1
+        joined.append((writer, ports))
+    sets = connection_sets(joined)
+    for cset in sets:
+        if cset.is_signal:
+            report.equations += len(cset.members) - 1
             continue
-        cls = type(group[0])
-        report.equations += (len(group) - 1) * len(cls.across_names())
+        cls = type(cset.members[0].port)
+        nodes = len({id(m.port) for m in cset.members})
+        report.equations += (nodes - 1) * len(cls.across_names())
         report.equations += len(cls.through_names())
-    connected = {id(p) for p in members.values() if isinstance(p, Connector)}
+    connected = inside_connected(sets)
     for el in elements:
-        if isinstance(el, Connector) and el._parent is not root and id(el) not in connected:
+        if isinstance(el, Connector) and el._parent is not root \
+                and port_key(el) not in connected:
             # Modelica: an unconnected inside connector's through variables are zero
             report.equations += len(type(el).through_names())
 

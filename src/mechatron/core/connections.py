@@ -1,0 +1,120 @@
+"""Connection sets with inside and outside connectors (Modelica 3, section 9.2).
+
+A ``connect`` written in a component ``C`` joins *elements*: each is a port together with
+its side. A port of ``C`` itself is an **outside** element there (seen from inside ``C``,
+it leads out); a port of one of ``C``'s parts is an **inside** element. The same port of a
+subsystem is therefore an outside element in the subsystem's own connections and an inside
+element in its parent's: two different elements, in two different sets, which share the
+port's variables. Per set:
+
+- across variables are all equal;
+- through variables sum to zero with the inside elements counted positive and the outside
+  ones negative (what flows into the subsystem's port flows on into its parts), so each
+  through variable is summed exactly once per node of the network;
+- a signal set is driven by exactly one element: an inside Output (a part's output) or an
+  outside Input (the component's own input, seen from inside).
+
+Both the compiler and the local balance check (:mod:`mechatron.core.balance`) build their
+sets here, so that they count the same equations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from mechatron.core.component import Connector, Element, SignalRef
+from mechatron.core.declarations import Input, Output
+
+__all__ = ["Member", "ConnectionSet", "connection_sets", "is_driver", "port_key",
+           "inside_connected"]
+
+
+@dataclass(frozen=True)
+class Member:
+    """One element of a connection set: a port (a Connector or a SignalRef) and whether it
+    is an outside connector of the component that wrote the connect."""
+
+    port: object
+    outside: bool
+
+    @property
+    def sign(self) -> float:
+        """+1 for inside, -1 for outside: the factor of its through variables in the sum."""
+        return -1.0 if self.outside else 1.0
+
+    @property
+    def path(self) -> str:
+        p = self.port
+        return p.path() if isinstance(p, SignalRef) else p.path
+
+
+@dataclass
+class ConnectionSet:
+    members: list[Member]
+
+    @property
+    def is_signal(self) -> bool:
+        return isinstance(self.members[0].port, SignalRef)
+
+
+def port_key(port) -> tuple:
+    """A hashable identity of a port (connectors by object, signals by owner and name)."""
+    if isinstance(port, SignalRef):
+        return ("signal", id(port.owner), port.name)
+    return ("port", id(port))
+
+
+def _is_own(port, writer: Element) -> bool:
+    owner = port.owner if isinstance(port, SignalRef) else port._parent
+    return owner is writer
+
+
+def is_driver(member: Member) -> bool:
+    """Whether a signal element drives its set: a part's Output, or the writing
+    component's own Input (which, seen from inside, brings a value in)."""
+    decl = member.port.declaration
+    return isinstance(decl, Output) if not member.outside else isinstance(decl, Input)
+
+
+def connection_sets(connections) -> list[ConnectionSet]:
+    """The connection sets of ``connections``, an iterable of ``(writer, ports)``: the
+    component that wrote a ``connect`` and the resolved ports it joins (Connectors or
+    SignalRefs). Members are ordered by path within a set, sets by their first member, so
+    that the result does not depend on the order the connects were written in."""
+    parent: dict[tuple, tuple] = {}
+    members: dict[tuple, Member] = {}
+
+    def find(a):
+        root = a
+        while parent[root] != root:
+            root = parent[root]
+        while parent[a] != root:
+            parent[a], a = root, parent[a]
+        return root
+
+    for writer, ports in connections:
+        keys = []
+        for port in ports:
+            outside = _is_own(port, writer)
+            key = (port_key(port), outside)
+            if key not in members:
+                members[key] = Member(port, outside)
+                parent[key] = key
+            keys.append(key)
+        for a, b in zip(keys, keys[1:]):
+            ra, rb = find(a), find(b)
+            if ra != rb:
+                parent[rb] = ra
+    groups: dict[tuple, list[Member]] = {}
+    for key, member in members.items():
+        groups.setdefault(find(key), []).append(member)
+    sets = [ConnectionSet(sorted(g, key=lambda m: (m.path, m.outside)))
+            for g in groups.values()]
+    sets.sort(key=lambda s: (s.members[0].path, s.members[0].outside))
+    return sets
+
+
+def inside_connected(sets: list[ConnectionSet]) -> set[tuple]:
+    """Keys (:func:`port_key`) of the ports that appear as an inside element somewhere:
+    those connected from outside their component."""
+    return {port_key(m.port) for s in sets for m in s.members if not m.outside}
