@@ -16,12 +16,12 @@ from mechatron.core.component import Component, Connect, Connector, Element, Sig
 from mechatron.core.connections import (connection_sets, inside_connected, is_driver,
                                         port_key)
 from mechatron.core.context import BuildContext
-from mechatron.core.declarations import (Across, Input, Output, Parameter, Start, Through,
-                                         Variable)
+from mechatron.core.declarations import (Across, Input, Output, Parameter,
+                                         ParameterExpression, Start, Through, Variable)
 from mechatron.core.domains import SIGNAL
 from mechatron.core.events import EventAction
 from mechatron.errors import ConnectError, ModelError, ParameterError, UnitError
-from mechatron.units import dimensionality, to_si
+from mechatron.units import dimensionality, to_si, ureg
 
 __all__ = ["FlatModel", "FlatVariable", "FlatParameter", "FlatEquation", "flatten"]
 
@@ -38,6 +38,20 @@ class FlatParameter:
     #: an external input of the model (a signal Input of the root component): a slot of
     #: ``p`` that ``simulate(inputs=...)`` fills with a signal of time
     is_input: bool = False
+
+
+@dataclass
+class BoundParameter:
+    """A part's parameter given as an expression of its parent's parameters
+    (``r = Resistor(R=R / 2)`` in the parent's class): not a slot of ``p`` of its own."""
+
+    name: str
+    expr: ca.SX        # of the parent's parameter symbols
+    value: float
+    unit: str
+    doc: str
+    owner: str
+    binding: str       # as written, e.g. "(R / 2) of 'motor'"
 
 
 @dataclass
@@ -66,6 +80,8 @@ class FlatModel:
     name: str
     context: BuildContext
     parameters: dict[str, FlatParameter] = field(default_factory=dict)
+    #: parameters of parts bound to expressions of their parents' parameters
+    bound_parameters: dict[str, BoundParameter] = field(default_factory=dict)
     variables: dict[str, FlatVariable] = field(default_factory=dict)
     equations: list[FlatEquation] = field(default_factory=list)
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
@@ -190,12 +206,19 @@ def _summary(name: str, problems: list[str]) -> str:
 
 def _bind_symbols(flat: FlatModel, elements, problems) -> None:
     ctx = flat.context
+    values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
     for el in elements:
         syms = {}
+        own_values = values[id(el)] = {}
         owner = el._parent if isinstance(el, Connector) else el
         owner_path = owner.path if owner is not None else ""
         for key, decl in type(el)._declarations.items():
             path = f"{el.path}.{key}" if el.path else key
+            if isinstance(decl, Parameter) and \
+                    isinstance(el._values.get(key), ParameterExpression):
+                syms[key], own_values[key] = _bind_expression(
+                    flat, el, key, decl, el._values[key], values, problems)
+                continue
             sym = ca.SX.sym(path)
             syms[key] = sym
             if isinstance(decl, Parameter):
@@ -212,6 +235,7 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
                         problems.add(UnitError, str(exc))
                     else:
                         _check_range(el, key, decl, value, problems)
+                own_values[key] = value
                 flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
                                                       owner_path, (decl.min, decl.max))
             else:
@@ -233,6 +257,44 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
                                                     getattr(decl, "state_select", "default"))
                 ctx.unknowns[path] = sym
         el._syms = syms
+
+
+def _bind_expression(flat, el, key, decl, expr, values, problems):
+    """Bind ``el.key`` to an expression of its parent's parameters: the symbol is the
+    expression of the parent's symbols, the value its value; units must agree."""
+    path = _join(el.path, key)
+    parent = el._parent
+    where = f"{el.describe()}: {key} = {expr.text}"
+    if parent is None or parent._syms is None:
+        problems.append(f"{where} refers to parameters of an enclosing component, but "
+                        f"{el.describe()} has none. Give {key} a value.")
+        return ca.SX.nan(), float("nan")
+    decls = type(parent)._declarations
+    missing = [n for n in expr.names if not isinstance(decls.get(n), Parameter)]
+    if missing:
+        problems.append(f"{where}: {', '.join(missing)} is not a parameter of "
+                        f"{parent.describe()}. Pass on parameters of the class whose body "
+                        "declares the part.")
+        return ca.SX.nan(), float("nan")
+    try:
+        got = ureg.Quantity(expr.evaluate(lambda n: ureg.Quantity(1.0, decls[n].unit)))
+        if got.dimensionality != dimensionality(decl.unit):
+            problems.add(UnitError, f"{where}: the expression is in {got.units:~} "
+                         f"({got.dimensionality or 'dimensionless'}), {key} in "
+                         f"{decl.unit} ({dimensionality(decl.unit) or 'dimensionless'}). "
+                         "Pass on a parameter of the same dimension.")
+            return ca.SX.nan(), float("nan")
+    except Exception as exc:  # noqa: BLE001 - pint's dimension errors, reported
+        problems.add(UnitError, f"{where}: {exc}.")
+        return ca.SX.nan(), float("nan")
+    sym = ca.SX(expr.evaluate(lambda n: parent._syms[n]))
+    pvals = values.get(id(parent), {})
+    value = float(expr.evaluate(lambda n: pvals.get(n, float("nan"))))
+    _check_range(el, key, decl, value, problems)
+    flat.bound_parameters[path] = BoundParameter(
+        path, sym, value, decl.unit, decl.doc, el.path,
+        f"{expr.text} of '{parent.path or flat.name}'")
+    return sym, value
 
 
 def _external_inputs(flat: FlatModel, model: Component) -> None:

@@ -2,11 +2,11 @@
 
 from mechatron.core.component import Component, Connect, Connector, Element, System
 from mechatron.core.context import connect, der, if_else
-from mechatron.core.declarations import (Across, Input, Output, Parameter, Start, Through,
-                                         Variable)
+from mechatron.core.declarations import (Across, Input, Output, Parameter,
+                                         ParameterExpression, Start, Through, Variable)
 from mechatron.core.domain import Domain
 from mechatron.core.events import Clock, EventAction, sample, when
 
 __all__ = ["Component", "Connector", "Element", "System", "Connect", "connect", "der",
-           "if_else", "Across", "Through", "Input", "Output", "Parameter", "Variable",
+           "if_else", "Across", "Through", "Input", "Output", "Parameter", "ParameterExpression", "Variable",
            "Start", "Domain", "Clock", "EventAction", "sample", "when"]

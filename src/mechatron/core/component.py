@@ -109,7 +109,8 @@ class Element:
     def _set(self, key: str, value) -> None:
         decl = type(self)._declarations.get(key)
         if isinstance(decl, Parameter):
-            self._values[key] = value
+            # a parameter of the enclosing class passed on: Resistor(R=R)
+            self._values[key] = value._expr() if isinstance(value, Parameter) else value
         elif isinstance(decl, Variable) and not isinstance(decl, (Input,)):
             if isinstance(value, Start):
                 self._starts[key] = value

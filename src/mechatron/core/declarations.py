@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from mechatron.errors import ModelError
 from mechatron.units import check_unit
 
-__all__ = ["Parameter", "Variable", "Across", "Through", "Input", "Output", "Start",
-           "PRIORITIES"]
+__all__ = ["Parameter", "ParameterExpression", "Variable", "Across", "Through", "Input",
+           "Output", "Start", "PRIORITIES"]
 
 PRIORITIES = ("high", "low", "none")
 STATE_SELECT = ("avoid", "default", "prefer")
@@ -37,6 +37,92 @@ class Start:
         if self.priority not in PRIORITIES:
             raise ValueError(f"Start: priority must be one of {PRIORITIES}, "
                              f"got {self.priority!r}.")
+
+
+class _Arithmetic:
+    """Arithmetic on parameters in a class body, giving a :class:`ParameterExpression`."""
+
+    def _expr(self) -> "ParameterExpression":
+        raise NotImplementedError
+
+    def _op(self, other, fn, op, reverse=False):
+        a = self._expr()
+        b = other._expr() if isinstance(other, _Arithmetic) else \
+            ParameterExpression(lambda look, v=other: v, (), lambda v=other: repr(v))
+        if reverse:
+            a, b = b, a
+        return ParameterExpression(lambda look: fn(a.evaluate(look), b.evaluate(look)),
+                                   a.parameters + b.parameters,
+                                   lambda: f"({a.text} {op} {b.text})")
+
+    def __add__(self, o):
+        return self._op(o, lambda x, y: x + y, "+")
+
+    def __radd__(self, o):
+        return self._op(o, lambda x, y: x + y, "+", True)
+
+    def __sub__(self, o):
+        return self._op(o, lambda x, y: x - y, "-")
+
+    def __rsub__(self, o):
+        return self._op(o, lambda x, y: x - y, "-", True)
+
+    def __mul__(self, o):
+        return self._op(o, lambda x, y: x * y, "*")
+
+    def __rmul__(self, o):
+        return self._op(o, lambda x, y: x * y, "*", True)
+
+    def __truediv__(self, o):
+        return self._op(o, lambda x, y: x / y, "/")
+
+    def __rtruediv__(self, o):
+        return self._op(o, lambda x, y: x / y, "/", True)
+
+    def __pow__(self, o):
+        return self._op(o, lambda x, y: x ** y, "**")
+
+    def __neg__(self):
+        a = self._expr()
+        return ParameterExpression(lambda look: -a.evaluate(look), a.parameters,
+                                   lambda: f"-{a.text}")
+
+
+class ParameterExpression(_Arithmetic):
+    """A parameter value given as an expression of the enclosing component's parameters,
+    Modelica's ``Resistor r(R=R/2)``: written in a class body as ``r = Resistor(R=R / 2)``
+    where ``R`` is a :class:`Parameter` of the class being defined.
+
+    The compiler evaluates it on the enclosing instance's parameter symbols, so the part
+    follows its parent's value, also when that value is changed between runs.
+    """
+
+    def __init__(self, fn, parameters: tuple, text):
+        self._fn = fn
+        self.parameters = tuple(parameters)    # the Parameter declarations it reads
+        self._text = text
+
+    @property
+    def text(self) -> str:
+        return self._text()
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.parameters)
+
+    def _expr(self) -> "ParameterExpression":
+        return self
+
+    def __deepcopy__(self, memo):
+        return self              # immutable; shared by every copy of a template
+
+    def evaluate(self, lookup):
+        """The value with each parameter replaced by ``lookup(name)`` (a symbol, a float
+        or a quantity)."""
+        return self._fn(lookup)
+
+    def __repr__(self) -> str:
+        return f"ParameterExpression({self.text})"
 
 
 class Declaration:
@@ -67,8 +153,12 @@ class Declaration:
         return f"{type(self).__name__}({self.unit!r}, doc={self.doc!r})"
 
 
-class Parameter(Declaration):
+class Parameter(_Arithmetic, Declaration):
     """A parameter: a value fixed during a simulation, tunable between runs.
+
+    In the body of a composite component's class, a parameter can be passed on to a part,
+    alone or in an expression: ``r = Resistor(R=R / 2)`` (see
+    :class:`ParameterExpression`).
 
     Parameters
     ----------
@@ -91,6 +181,10 @@ class Parameter(Declaration):
         self.default = default
         self.min = min
         self.max = max
+
+    def _expr(self) -> ParameterExpression:
+        # the name is set when the class body ends: read it when evaluated
+        return ParameterExpression(lambda look: look(self.name), (self,), lambda: self.name)
 
 
 class Variable(Declaration):
