@@ -49,7 +49,7 @@ def _last_period(D):
     res = mt.simulate(ENTRY.build("acausal", D=D), t_stop, solver="rk45", rtol=1e-9,
                       atol=1e-11, t_out=t)
     k = int(np.searchsorted(t, t_stop - T))
-    return p, t[k:], {name: res[name][k:] for name in ("c_f.v", "inertia.w", "pwm.v")}
+    return p, t[k:], {name: res[name][k:] for name in ("c_f.v", "motor.inertia.w", "pwm.v")}
 
 
 @pytest.fixture(scope="module", params=[0.3, 0.7])
@@ -85,4 +85,4 @@ def test_motor_turns_at_the_speed_of_the_mean_bridge_voltage(steady):
     p, t, y = steady
     V = p["V_bus"] * p["D"]
     w_dc = p["k"] * V / (p["R"] * p["B"] + p["k"] ** 2)
-    assert trapezoid(y["inertia.w"], t) / (t[-1] - t[0]) == pytest.approx(w_dc, rel=1e-6)
+    assert trapezoid(y["motor.inertia.w"], t) / (t[-1] - t[0]) == pytest.approx(w_dc, rel=1e-6)

@@ -5,7 +5,8 @@ are *chosen*: a small 24 V motor). Its parts:
 
 * a three-phase star winding with a **trapezoidal back EMF** and a one-pole-pair rotor
   (:class:`TrapezoidalStarWinding`);
-* a three-phase inverter of six N-channel MOSFETs with body diodes (library
+* a three-phase inverter of three legs (:class:`InverterLeg`, a subsystem used three
+  times), each two N-channel MOSFETs with body diodes (library
   :class:`~mechatron.library.electrical.NMOSFET`) fed by a DC supply, each gate driven by
   an ideal isolated gate driver (:class:`GateDriver`);
 * three **Hall sensors** 120 electrical degrees apart, which split the turn into six
@@ -78,7 +79,8 @@ from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
 
 __all__ = ["trapezoid", "TrapezoidalStarWinding", "HallSensors", "SixStepCommutation",
-           "SpeedPI", "PWMComparator", "GateDriver", "DutyScaledSource", "build_acausal",
+           "SpeedPI", "PWMComparator", "GateDriver", "InverterLeg", "DutyScaledSource",
+           "build_acausal",
            "build_equation", "BLDCDriveEquation", "BLDCDriveEquationPWM", "COMMUTATION",
            "ENTRY"]
 
@@ -326,6 +328,42 @@ class DutyScaledSource(OnePort):
         return [self.v == self.d * self.V_dc]
 
 
+class InverterLeg(mt.Component):
+    """One leg (half bridge) of the inverter, as a subsystem: a high-side and a low-side
+    N-channel MOSFET with body diodes, each gate driven by an ideal isolated gate driver.
+
+    Ports: ``dc_p`` and ``dc_n`` the DC rails, ``out`` the phase terminal; signal inputs
+    ``cmd_h`` and ``cmd_l`` the gate commands (0 or 1). The MOSFET and driver parameters
+    are the leg's own and passed on to its parts.
+    """
+
+    R_on = mt.Parameter("Ohm", default=0.01, min=0, doc="MOSFET on-resistance")
+    G_off = mt.Parameter("S", default=1e-3, min=0, doc="MOSFET off-conductance")
+    V_f = mt.Parameter("V", default=0.8, doc="Body-diode forward voltage")
+    R_d = mt.Parameter("Ohm", default=0.01, min=0, doc="Body-diode on-resistance")
+    V_g = mt.Parameter("V", default=12.0, doc="Gate drive voltage")
+
+    dc_p = Pin(doc="Positive DC rail")
+    dc_n = Pin(doc="Negative DC rail")
+    out = Pin(doc="Phase output")
+    cmd_h = mt.Input("1", doc="High-side gate command (0 or 1)")
+    cmd_l = mt.Input("1", doc="Low-side gate command (0 or 1)")
+
+    high = el.NMOSFET(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d)
+    low = el.NMOSFET(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d)
+    drv_h = GateDriver(V_g=V_g)
+    drv_l = GateDriver(V_g=V_g)
+
+    def equations(self):
+        return [mt.connect(self.dc_p, self.high.p),
+                mt.connect(self.high.n, self.low.p, self.out, self.drv_h.n),
+                mt.connect(self.low.n, self.dc_n, self.drv_l.n),
+                mt.connect(self.drv_h.p, self.high.gate),
+                mt.connect(self.drv_l.p, self.low.gate),
+                mt.connect(self.cmd_h, self.drv_h.cmd),
+                mt.connect(self.cmd_l, self.drv_l.cmd)]
+
+
 # -- the two variants ----------------------------------------------------------------------
 
 def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R_on,
@@ -350,19 +388,14 @@ def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R
     tacho = m.add("tacho", rot.AngularVelocitySensor())
     housing = m.add("housing", rot.RotationalReference())
     m.connect(supply.n, ground.port)
-    fet = dict(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d)
-    for k in "abc":
-        high = m.add(f"q_{k}h", el.NMOSFET(**fet))
-        low = m.add(f"q_{k}l", el.NMOSFET(**fet))
-        drv_high = m.add(f"drv_{k}h", GateDriver(V_g=V_g))
-        drv_low = m.add(f"drv_{k}l", GateDriver(V_g=V_g))
-        m.connect(supply.p, high.p)
-        m.connect(high.n, low.p, getattr(winding, k), drv_high.n)
-        m.connect(low.n, supply.n, drv_low.n)
-        m.connect(drv_high.p, high.gate)
-        m.connect(drv_low.p, low.gate)
-        m.connect(getattr(commutation, f"g_{k}h"), drv_high.cmd)
-        m.connect(getattr(commutation, f"g_{k}l"), drv_low.cmd)
+    for k in "abc":   # one subsystem per phase leg
+        leg = m.add(f"leg_{k}", InverterLeg(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d,
+                                            V_g=V_g))
+        m.connect(supply.p, leg.dc_p)
+        m.connect(leg.dc_n, supply.n)
+        m.connect(leg.out, getattr(winding, k))
+        m.connect(getattr(commutation, f"g_{k}h"), leg.cmd_h)
+        m.connect(getattr(commutation, f"g_{k}l"), leg.cmd_l)
     m.connect(winding.A, rotor.port, friction.A, load.A, hall.A, tacho.A)
     m.connect(winding.B, friction.B, load.B, hall.B, tacho.B, housing.port)
     m.connect(hall.sector, commutation.sector)

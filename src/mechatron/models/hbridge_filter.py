@@ -23,7 +23,7 @@ edge (``a = exp(-D T / tau_f)``, ``c = exp(-T / tau_f)``, ``T = 1/f``)::
 and its mean is exactly ``D V_pwm`` (no DC current flows into the capacitor).
 
 Variants: ``acausal`` (PWMVoltageSource, Resistor, Capacitor, VoltageSensor, Gain,
-ControlledVoltageSource, motor parts) and ``equation`` (the three ODEs).
+ControlledVoltageSource, and the motor as the library's DCPermanentMagnetMotor subsystem) and ``equation`` (the three ODEs).
 """
 
 from __future__ import annotations
@@ -101,11 +101,7 @@ class HBridgeFilterAcausal(mt.Component):
     sense = el.VoltageSensor(doc="Analog input of the I/O card (ideal, no load)")
     bridge_gain = blocks.Gain(doc="Power stage gain V_bus / V_pwm")
     bridge = el.ControlledVoltageSource(doc="H-bridge, averaged (ideal power stage)")
-    resistor = el.Resistor(doc="Armature resistance")
-    inductor = el.Inductor(doc="Armature inductance")
-    emf = em.RotationalEMF()
-    inertia = rot.Inertia(doc="Rotor")
-    damper = rot.RotationalDamper(doc="Viscous friction")
+    motor = em.DCPermanentMagnetMotor(doc="The seed's DC motor (a library subsystem)")
     ground = el.ElectricalReference()
     bridge_ground = el.ElectricalReference()
     housing = rot.RotationalReference()
@@ -116,12 +112,9 @@ class HBridgeFilterAcausal(mt.Component):
                 mt.connect(self.pwm.n, self.c_f.n, self.sense.n, self.ground.port),
                 mt.connect(self.sense.V, self.bridge_gain.u),
                 mt.connect(self.bridge_gain.y, self.bridge.u),
-                mt.connect(self.bridge.p, self.resistor.p),
-                mt.connect(self.resistor.n, self.inductor.p),
-                mt.connect(self.inductor.n, self.emf.p),
-                mt.connect(self.emf.n, self.bridge.n, self.bridge_ground.port),
-                mt.connect(self.emf.A, self.inertia.port, self.damper.A),
-                mt.connect(self.emf.B, self.damper.B, self.housing.port)]
+                mt.connect(self.bridge.p, self.motor.p),
+                mt.connect(self.motor.n, self.bridge.n, self.bridge_ground.port),
+                mt.connect(self.motor.B, self.housing.port)]
 
 
 class HBridgeFilterEquation(SeedMotor):
@@ -159,13 +152,9 @@ def _acausal(V_pwm, D, f, R_f, C_f, V_bus, R, L, k, J, B):
     model.c_f._values["C"] = C_f
     model.c_f._set("v", 0.0)
     model.bridge_gain._values["k"] = V_bus / V_pwm
-    model.resistor._values["R"] = R
-    model.inductor._values["L"] = L
-    model.inductor._set("i", 0.0)
-    model.emf._values["k"] = k
-    model.inertia._values["J"] = J
-    model.inertia._set("w", 0.0)
-    model.damper._values["D"] = B
+    model.motor._values.update(R=R, L=L, k=k, J=J, B_v=B)
+    model.motor.inductor._set("i", 0.0)
+    model.motor.inertia._set("w", 0.0)
     return model
 
 
@@ -198,7 +187,7 @@ ENTRY = register(ModelEntry(
                  "motor."),
     parameters=_PARAMS,
     variants={"acausal": _acausal, "equation": _equation},
-    outputs={"acausal": {"v_f": "c_f.v", "i": "inductor.i", "w": "inertia.w"},
+    outputs={"acausal": {"v_f": "c_f.v", "i": "motor.inductor.i", "w": "motor.inertia.w"},
              "equation": {"v_f": "v_f", "i": "i", "w": "w"}},
     output_units={"v_f": "V", "i": "A", "w": "rad/s"},
     # 150 whole PWM periods: the motor's mechanical time constant is 1.4 ms, and the run
