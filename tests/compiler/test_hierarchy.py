@@ -227,7 +227,7 @@ def test_a_passed_on_parameter_of_the_wrong_dimension_is_named():
                                                                  self.g.port)]
 
     with pytest.raises(UnitError, match=r"Resistor 'b.r': R = C: the expression is in "
-                                        r"F .*, R in Ohm"):
+                                        r"F .*, the parameter in Ohm"):
         mt.compile_model(Top())
 
 

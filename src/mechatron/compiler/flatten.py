@@ -8,6 +8,7 @@ connections imply (handed to alias elimination rather than written as equations)
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -207,56 +208,73 @@ def _summary(name: str, problems: list[str]) -> str:
 def _bind_symbols(flat: FlatModel, elements, problems) -> None:
     ctx = flat.context
     values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
+    variables, unknowns = flat.variables, ctx.unknowns
     for el in elements:
         syms = {}
         own_values = values[id(el)] = {}
         owner = el._parent if isinstance(el, Connector) else el
         owner_path = owner.path if owner is not None else ""
-        for key, decl in type(el)._declarations.items():
-            path = f"{el.path}.{key}" if el.path else key
-            if isinstance(decl, Parameter) and \
-                    isinstance(el._values.get(key), ParameterExpression):
+        prefix = f"{el.path}." if el.path else ""
+        params, plain = _declaration_plan(type(el))
+        for key, decl in params:
+            path = prefix + key
+            raw = el._values.get(key, decl.default)
+            if isinstance(raw, ParameterExpression):
                 syms[key], own_values[key] = _bind_expression(
-                    flat, el, key, decl, el._values[key], values, problems)
+                    flat, el, key, decl, raw, values, problems)
                 continue
-            sym = ca.SX.sym(path)
-            syms[key] = sym
-            if isinstance(decl, Parameter):
-                raw = el._values.get(key, decl.default)
-                value = float("nan")
-                if raw is None:
-                    problems.add(ParameterError,
-                                 f"{el.describe()}: parameter {key} has no value and no "
-                                 f"default. Give one, e.g. {type(el).__name__}({key}=...).")
-                else:
-                    try:
-                        value = to_si(raw, decl.unit, path)
-                    except UnitError as exc:
-                        problems.add(UnitError, str(exc))
-                    else:
-                        _check_range(el, key, decl, value, problems)
-                own_values[key] = value
-                flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
-                                                      owner_path, (decl.min, decl.max))
+            sym = syms[key] = ca.SX.sym(path)
+            value = float("nan")
+            if raw is None:
+                problems.add(ParameterError,
+                             f"{el.describe()}: parameter {key} has no value and no "
+                             f"default. Give one, e.g. {type(el).__name__}({key}=...).")
             else:
-                kind = ("across" if isinstance(decl, Across) else
-                        "through" if isinstance(decl, Through) else
-                        "input" if isinstance(decl, Input) else
-                        "output" if isinstance(decl, Output) else "variable")
-                start, priority = decl.start, decl.priority
-                given = el._starts.get(key)
-                if isinstance(given, Start):
-                    try:
-                        start = to_si(given.value, decl.unit, path)
-                    except UnitError as exc:
-                        problems.add(UnitError, str(exc))
-                    priority = given.priority
-                flat.variables[path] = FlatVariable(path, sym, decl.unit, decl.doc, kind,
-                                                    owner_path, start, priority,
-                                                    _domain_hint(el, decl),
-                                                    getattr(decl, "state_select", "default"))
-                ctx.unknowns[path] = sym
+                try:
+                    value = to_si(raw, decl.unit, path)
+                except UnitError as exc:
+                    problems.add(UnitError, str(exc))
+                else:
+                    _check_range(el, key, decl, value, problems)
+            own_values[key] = value
+            flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
+                                                  owner_path, (decl.min, decl.max))
+        starts = el._starts
+        for key, kind, unit, doc, start, priority, hint, select in plain:
+            path = prefix + key
+            sym = syms[key] = ca.SX.sym(path)
+            given = starts.get(key) if starts else None
+            if isinstance(given, Start):
+                try:
+                    start = to_si(given.value, unit, path)
+                except UnitError as exc:
+                    problems.add(UnitError, str(exc))
+                priority = given.priority
+            variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path, start,
+                                           priority, hint, select)
+            unknowns[path] = sym
         el._syms = syms
+
+
+@functools.lru_cache(maxsize=None)
+def _declaration_plan(cls):
+    """A class's parameters ``[(key, decl)]`` and variables with what flattening copies of
+    each (kind, unit, doc, start, priority, hint, state_select), worked out once per class,
+    in declaration order."""
+    params, plain = [], []
+    hint = (_class_hint(cls) or (cls.domain.hint if cls.domain else "")) \
+        if issubclass(cls, Connector) else ""
+    for key, decl in cls._declarations.items():
+        if isinstance(decl, Parameter):
+            params.append((key, decl))
+            continue
+        kind = ("across" if isinstance(decl, Across) else
+                "through" if isinstance(decl, Through) else
+                "input" if isinstance(decl, Input) else
+                "output" if isinstance(decl, Output) else "variable")
+        plain.append((key, kind, decl.unit, decl.doc, decl.start, decl.priority, hint,
+                      getattr(decl, "state_select", "default")))
+    return tuple(params), tuple(plain)
 
 
 def _bind_expression(flat, el, key, decl, expr, values, problems):
@@ -276,18 +294,12 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
                         f"{parent.describe()}. Pass on parameters of the class whose body "
                         "declares the part.")
         return ca.SX.nan(), float("nan")
-    try:
-        got = ureg.Quantity(expr.evaluate(lambda n: ureg.Quantity(1.0, decls[n].unit)))
-        if got.dimensionality != dimensionality(decl.unit):
-            problems.add(UnitError, f"{where}: the expression is in {got.units:~} "
-                         f"({got.dimensionality or 'dimensionless'}), {key} in "
-                         f"{decl.unit} ({dimensionality(decl.unit) or 'dimensionless'}). "
-                         "Pass on a parameter of the same dimension.")
-            return ca.SX.nan(), float("nan")
-    except Exception as exc:  # noqa: BLE001 - pint's dimension errors, reported
-        problems.add(UnitError, f"{where}: {exc}.")
+    message = _binding_dimensions(expr, type(parent), decl.unit)
+    if message:
+        problems.add(UnitError, f"{where}: {message}")
         return ca.SX.nan(), float("nan")
-    sym = ca.SX(expr.evaluate(lambda n: parent._syms[n]))
+    sym = expr.evaluate(lambda n: parent._syms[n])
+    sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
     pvals = values.get(id(parent), {})
     value = float(expr.evaluate(lambda n: pvals.get(n, float("nan"))))
     _check_range(el, key, decl, value, problems)
@@ -295,6 +307,30 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
         path, sym, value, decl.unit, decl.doc, el.path,
         f"{expr.text} of '{parent.path or flat.name}'")
     return sym, value
+
+
+_BINDING_CHECKS: dict = {}
+
+
+def _binding_dimensions(expr, parent_cls, unit: str) -> str:
+    """Why ``expr``, read in ``parent_cls``, cannot give a value in ``unit`` ("" if it
+    can). One pint evaluation per template and parent class, however many instances."""
+    key = (id(expr), parent_cls, unit)
+    if key in _BINDING_CHECKS:
+        return _BINDING_CHECKS[key][1]
+    decls = parent_cls._declarations
+    try:
+        got = ureg.Quantity(expr.evaluate(lambda n: ureg.Quantity(1.0, decls[n].unit)))
+        message = ""
+        if got.dimensionality != dimensionality(unit):
+            message = (f"the expression is in {got.units:~} "
+                       f"({got.dimensionality or 'dimensionless'}), the parameter in "
+                       f"{unit} ({dimensionality(unit) or 'dimensionless'}). Pass on a "
+                       "parameter of the same dimension.")
+    except Exception as exc:  # noqa: BLE001 - pint's dimension errors, reported
+        message = f"{exc}."
+    _BINDING_CHECKS[key] = (expr, message)     # holds expr: its id stays unique
+    return message
 
 
 def _external_inputs(flat: FlatModel, model: Component) -> None:
@@ -314,12 +350,6 @@ def _external_inputs(flat: FlatModel, model: Component) -> None:
                                              "", (None, None), is_input=True)
         flat.equations.append(FlatEquation(var.sym - sym, f"{key} == external input {key}",
                                            ""))
-
-
-def _domain_hint(el, decl) -> str:
-    if isinstance(el, Connector):
-        return _hint(el) or (type(el).domain.hint if type(el).domain else "")
-    return ""
 
 
 def _check_range(el, key, decl, value, problems) -> None:
@@ -480,12 +510,14 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
         if len(ok) > 1:
             joined.append((writer, ok))
     sets = connection_sets(joined)
+    flow_sums: list = []
     for cset in sets:
         flat.connection_sets.append([_set_member(m) for m in cset.members])
         if cset.is_signal:
             _signal_set(flat, cset, problems, model)
         else:
-            _physical_set(flat, cset)
+            _physical_set(flat, cset, flow_sums)
+    _flow_sums(flat, flow_sums)
     connected = inside_connected(sets) | tried
     wired_inside = {port_key(m.port) for s in sets for m in s.members if m.outside}
     for el in elements:
@@ -530,7 +562,12 @@ def _join(a, b):
 
 
 def _hint(port: Connector) -> str:
-    for decl in type(port)._declarations.values():
+    return _class_hint(type(port))
+
+
+@functools.lru_cache(maxsize=None)
+def _class_hint(cls) -> str:
+    for decl in cls._declarations.values():
         if isinstance(decl, Across) and decl.hint:
             return decl.hint
     return ""
@@ -600,7 +637,7 @@ def _units_compatible(a: str, b: str) -> bool:
     return not da or not db or da == db
 
 
-def _physical_set(flat: FlatModel, cset) -> None:
+def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
     members = cset.members
     origin = "connect(" + ", ".join(m.path for m in members) + ")"
     cls = type(members[0].port)
@@ -615,10 +652,28 @@ def _physical_set(flat: FlatModel, cset) -> None:
             m = ports[0]
             flat.aliases.append((f"{m.path}.{t}", f"{first.path}.{t}",
                                  -first.sign * m.sign, origin))
-        else:
-            total = sum((m.sign * flat.variables[f"{m.path}.{t}"].sym for m in members[1:]),
-                        first.sign * flat.variables[f"{first.path}.{t}"].sym)
-            flat.equations.append(FlatEquation(total, f"{origin}: sum of {t} == 0"))
+        else:   # formed in bulk by _flow_sums
+            flow_sums.append(([(f"{m.path}.{t}", m.sign) for m in members],
+                              f"{origin}: sum of {t} == 0"))
+
+
+def _flow_sums(flat: FlatModel, flow_sums) -> None:
+    """The through-variable sums of all sets of three or more members, as one sparse
+    signed incidence matrix times the vector of their variables (three CasADi calls in
+    all, not one per term)."""
+    if not flow_sums:
+        return
+    index: dict[str, int] = {}
+    rows, cols, vals = [], [], []
+    for r, (terms, _) in enumerate(flow_sums):
+        for name, sign in terms:
+            rows.append(r)
+            cols.append(index.setdefault(name, len(index)))
+            vals.append(sign)
+    A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
+    x = ca.vertcat(*[flat.variables[name].sym for name in index])
+    for (_, origin), residual in zip(flow_sums, ca.vertsplit(ca.mtimes(A, x))):
+        flat.equations.append(FlatEquation(residual, origin))
 
 
 def _check_references(flat, model, elements, sets, problems) -> None:

@@ -36,6 +36,37 @@ def compile_model(model: Component, *, name: str | None = None) -> CompiledModel
             gc.enable()
 
 
+def _logged_expressions(flat, alias) -> list:
+    """Every variable of the model as an expression of the unknowns: itself, or a scaled
+    representative or a constant when alias elimination removed it. Scaled in bulk (one
+    element-wise product, one constant vector), not one CasADi call per alias."""
+    out: list = []
+    scaled, reps, factors = [], [], []
+    constant, values = [], []
+    eliminated = alias.eliminated
+    for j, n in enumerate(flat.variables):
+        e = eliminated.get(n)
+        if e is None:
+            out.append(flat.variables[n].sym)
+            continue
+        out.append(None)
+        if e[0] is None:
+            constant.append(j)
+            values.append(e[1])
+        else:
+            scaled.append(j)
+            reps.append(flat.variables[e[0]].sym)
+            factors.append(e[1])
+    if scaled:
+        exprs = ca.vertsplit(ca.times(ca.SX(ca.DM(factors)), ca.vertcat(*reps)))
+        for j, e in zip(scaled, exprs):
+            out[j] = e
+    if constant:
+        for j, e in zip(constant, ca.vertsplit(ca.SX(ca.DM(values)))):
+            out[j] = e
+    return out
+
+
 def _compile(model: Component, name: str | None) -> CompiledModel:
     """Compile a model into a :class:`CompiledModel`.
 
@@ -89,13 +120,7 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
 
     # every logged variable as an expression of the unknowns
     names = list(flat.variables)
-    out_expr = []
-    for n in names:
-        if n in alias.eliminated:
-            rep, k = alias.eliminated[n]
-            out_expr.append(ca.SX(k) if rep is None else k * flat.variables[rep].sym)
-        else:
-            out_expr.append(flat.variables[n].sym)
+    out_expr = _logged_expressions(flat, alias)
     dists = [r.d for r in relations]
     n_ode, n_res, n_out = len(low.ode), len(low.residuals), len(out_expr)
     pile = list(low.ode) + list(low.residuals) + out_expr + dists + plan.exprs

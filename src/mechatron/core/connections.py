@@ -29,23 +29,24 @@ __all__ = ["Member", "ConnectionSet", "connection_sets", "is_driver", "port_key"
            "inside_connected"]
 
 
-@dataclass(frozen=True)
 class Member:
-    """One element of a connection set: a port (a Connector or a SignalRef) and whether it
-    is an outside connector of the component that wrote the connect."""
+    """One element of a connection set: a port (a Connector or a SignalRef), whether it
+    is an outside connector of the component that wrote the connect, and its path."""
 
-    port: object
-    outside: bool
+    __slots__ = ("port", "outside", "path")
+
+    def __init__(self, port, outside: bool):
+        self.port = port
+        self.outside = outside
+        self.path = port.path() if isinstance(port, SignalRef) else port.path
 
     @property
     def sign(self) -> float:
         """+1 for inside, -1 for outside: the factor of its through variables in the sum."""
         return -1.0 if self.outside else 1.0
 
-    @property
-    def path(self) -> str:
-        p = self.port
-        return p.path() if isinstance(p, SignalRef) else p.path
+    def __repr__(self) -> str:
+        return f"Member({self.path!r}, {'outside' if self.outside else 'inside'})"
 
 
 @dataclass
@@ -108,10 +109,13 @@ def connection_sets(connections) -> list[ConnectionSet]:
     groups: dict[tuple, list[Member]] = {}
     for key, member in members.items():
         groups.setdefault(find(key), []).append(member)
-    sets = [ConnectionSet(sorted(g, key=lambda m: (m.path, m.outside)))
-            for g in groups.values()]
-    sets.sort(key=lambda s: (s.members[0].path, s.members[0].outside))
+    sets = [ConnectionSet(sorted(g, key=_order)) for g in groups.values()]
+    sets.sort(key=lambda s: _order(s.members[0]))
     return sets
+
+
+def _order(m: Member) -> tuple:
+    return (m.path, m.outside)
 
 
 def inside_connected(sets: list[ConnectionSet]) -> set[tuple]:

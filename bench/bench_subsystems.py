@@ -1,0 +1,109 @@
+"""Compile time of a model built from a reused subsystem against the same model built flat.
+
+The RC ladder of ``bench_scaling`` (a 1 V source, N sections of a 1 Ohm series resistor and
+a 1 mF capacitor to ground) in two forms:
+
+* flat: ``mt.System`` with 2 N parts wired by the model;
+* hierarchical: N instances of one ``Stage`` class (its own pins ``p``, ``n``, ``gnd``,
+  a resistor and a capacitor wired inside), wired in series by the model. Each stage adds
+  three ports (six variables) and their connection sets, which alias elimination removes.
+
+For N = 100 and 1000: the median compile time of fresh builds (``mt.compile_model``),
+equations before and after alias elimination, and the ratio hierarchical / flat (goal of
+issue 15: within 1.2). Both compiled models are then simulated for 1 s and their capacitor
+voltages compared (max abs difference), so the timing is of models that agree.
+
+Run: ``python bench/bench_subsystems.py [--quick]``.
+"""
+
+from __future__ import annotations
+
+import _common  # noqa: F401  (import path)
+from _common import log, main, ratio, repeat, summary
+
+import numpy as np
+
+import mechatron as mt
+from mechatron.library import electrical as el
+
+R_SERIES, C_SHUNT, V_SOURCE = 1.0, 1e-3, 1.0
+
+
+class Stage(mt.Component):
+    """One ladder section: series resistor from p to n, capacitor from n to gnd."""
+
+    R = mt.Parameter("Ohm", default=R_SERIES, doc="Series resistance")
+    C = mt.Parameter("F", default=C_SHUNT, doc="Shunt capacitance")
+    p = el.Pin(doc="Input")
+    n = el.Pin(doc="Output")
+    gnd = el.Pin(doc="Common")
+    r = el.Resistor(R=R)
+    c = el.Capacitor(C=C)
+
+    def equations(self):
+        return [mt.connect(self.p, self.r.p), mt.connect(self.r.n, self.c.p, self.n),
+                mt.connect(self.c.n, self.gnd)]
+
+
+def flat_ladder(n: int) -> mt.System:
+    m = mt.System(f"flat_{n}")
+    src = m.add("src", el.DCVoltageSource(V=V_SOURCE))
+    gnd = m.add("gnd", el.ElectricalReference())
+    m.connect(src.n, gnd.port)
+    node = src.p
+    for k in range(n):
+        r = m.add(f"r{k}", el.Resistor(R=R_SERIES))
+        c = m.add(f"c{k}", el.Capacitor(C=C_SHUNT))
+        m.connect(node, r.p)
+        m.connect(r.n, c.p)
+        m.connect(c.n, gnd.port)
+        node = r.n
+    return m
+
+
+def stage_ladder(n: int) -> mt.System:
+    m = mt.System(f"stages_{n}")
+    src = m.add("src", el.DCVoltageSource(V=V_SOURCE))
+    gnd = m.add("gnd", el.ElectricalReference())
+    m.connect(src.n, gnd.port)
+    node = src.p
+    for k in range(n):
+        s = m.add(f"s{k}", Stage())
+        m.connect(node, s.p)
+        m.connect(s.gnd, gnd.port)
+        node = s.n
+    return m
+
+
+def _compile(build, n, repeats):
+    cm, times = repeat(lambda: mt.compile_model(build(n)), repeats)
+    counts = cm.report.get("counts", {}) if isinstance(cm.report, dict) else {}
+    return cm, summary(times), counts
+
+
+def run(quick: bool = False) -> dict:
+    """Compile time of a reused subsystem against the flat model (issue 15)."""
+    sizes = (100,) if quick else (100, 1000)
+    repeats = 3 if quick else 5
+    rows = []
+    for n in sizes:
+        log(f"subsystems: N = {n}")
+        cm_flat, t_flat, c_flat = _compile(flat_ladder, n, repeats)
+        cm_sub, t_sub, c_sub = _compile(stage_ladder, n, repeats)
+        t = np.linspace(0.0, 1.0, 101)
+        a = mt.simulate(cm_flat, 1.0, t_out=t)
+        b = mt.simulate(cm_sub, 1.0, t_out=t)
+        diff = max(float(np.max(np.abs(a[f"c{k}.v"] - b[f"s{k}.c.v"]))) for k in range(n))
+        rows.append({"N": n, "flat_compile": t_flat, "subsystem_compile": t_sub,
+                     "ratio_subsystem_over_flat": ratio(t_sub["median_s"],
+                                                        t_flat["median_s"]),
+                     "counts_flat": c_flat, "counts_subsystem": c_sub,
+                     "states": [len(cm_flat.state_names), len(cm_sub.state_names)],
+                     "max_abs_diff_v": diff})
+    return {"rows": rows, "goal": "ratio_subsystem_over_flat <= 1.2 (issue 15)",
+            "notes": ["Median of fresh compiles (instance built inside the timed call). "
+                      "Ratios matter; absolute times vary with load."]}
+
+
+if __name__ == "__main__":
+    main(run)
