@@ -18,6 +18,7 @@ import numpy as np
 
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
+from mechatron.compiler.pivoting import pivot_columns
 from mechatron.errors import StructuralError
 
 __all__ = ["Lowered", "lower"]
@@ -72,6 +73,16 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         of the state-selection Jacobian are scaled by ``10**(-3*preference)`` before the
         pivoted QR, so a preferred variable is made dummy only when no other choice is
         nonsingular.
+
+    Notes
+    -----
+    State selection depends on the numbers only where they differ: the pivoted QR
+    (`mechatron.compiler.pivoting.pivot_columns`) treats residual column norms within
+    a relative `TIE_RTOL` as equal and gives the tie to the candidate that
+    `dummy_derivatives` ranks first (preference, then derivatives created by index
+    reduction, then derivative order, then later declaration, the order of
+    `unknowns`). The states, equations and generated code are then the same whatever
+    BLAS kernel evaluates the Jacobian.
     """
     # -- variables of the structural problem: unknowns and their derivatives -------------
     var_syms: list[ca.SX] = [syms[n] for n in unknowns]
@@ -144,10 +155,8 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         fun = ca.Function("jac_select", free, [jac])
         value = np.array(fun.call(guess(free))[0], dtype=float)
         value = np.atleast_2d(value).reshape(len(eqs), len(candidates))
-        from scipy.linalg import qr
         scale = np.array([10.0 ** (-3.0 * weight(c)) for c in candidates])
-        _, _, piv = qr(value * scale, pivoting=True)
-        chosen = piv[:k]
+        chosen = pivot_columns(value * scale, k)
         if pref and k and _singular(value[:, chosen]):
             _raise_singular_selection(name, [orig[e] for e in eqs],
                                       [var_names[c] for c in candidates])
