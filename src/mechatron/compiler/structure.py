@@ -53,7 +53,8 @@ def _csr(expr: ca.SX, syms: ca.SX) -> list[list[int]]:
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
           syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
           start_guess, hints: dict[str, str],
-          preference: dict[str, float] | None = None) -> Lowered:
+          preference: dict[str, float] | None = None,
+          declared: dict[str, int] | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
@@ -73,6 +74,10 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         of the state-selection Jacobian are scaled by ``10**(-3*preference)`` before the
         pivoted QR, so a preferred variable is made dummy only when no other choice is
         nonsingular.
+    declared : dict, optional
+        Declaration order of each unknown (its place in the flat model); an exact tie in
+        state selection keeps the unknown declared first as a state. Default: the order
+        of `unknowns`.
 
     Notes
     -----
@@ -80,8 +85,8 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     (`mechatron.compiler.pivoting.pivot_columns`) treats residual column norms within
     a relative `TIE_RTOL` as equal and gives the tie to the candidate that
     `dummy_derivatives` ranks first (preference, then derivatives created by index
-    reduction, then derivative order, then later declaration, the order of
-    `unknowns`). The states, equations and generated code are then the same whatever
+    reduction, then derivative order, then later declaration, see `declared`). The
+    states, equations and generated code are then the same whatever
     BLAS kernel evaluates the Jacobian.
     """
     # -- variables of the structural problem: unknowns and their derivatives -------------
@@ -163,7 +168,11 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         return [candidates[j] for j in chosen]
 
     priority = [-weight(v) for v in range(len(var_syms))] if pref else None
-    dummies = (set(dummy_derivatives(ir, select=select, priority=priority))
+    n_unknown = len(unknowns)
+    rank = ([declared.get(n, len(declared) + i) for i, n in enumerate(unknowns)]
+            if declared is not None else list(range(n_unknown)))
+    rank += range(n_unknown, ir.n_var_original)   # derivatives: their root's rank is read
+    dummies = (set(dummy_derivatives(ir, select=select, priority=priority, rank=rank))
                if differentiated else set())
     states = [v for v, d in enumerate(var_to_diff) if d != -1 and d not in dummies]
     is_state = [False] * len(var_syms)
