@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.linalg import qr
 
-from mechatron.compiler.pivoting import TIE_RTOL, pivot_columns
+from mechatron.compiler.pivoting import TIE_RTOL, largest, pivot_columns
 
 
 def ulps(a, rng, n=4):
@@ -102,3 +102,11 @@ def test_tied_choice_is_stable_under_ulps_scaling_and_row_order(seed, m, r, scal
     for j in range(0, 2 * r, 2):
         if j + 1 in pos:
             assert j in pos and pos[j] < pos[j + 1]
+
+
+def test_largest_lists_ties_in_index_order():
+    w = [0.5, 0.7071067811865476, 1e-4, 0.7071067811865475, 0.5, float("nan")]
+    assert largest(w, 10, floor=1e-3) == [1, 3, 0, 4]
+    assert largest(w, 2) == [1, 3]
+    assert largest(w[::-1], 10, floor=1e-3) == [2, 4, 1, 5]
+    assert largest([], 3) == []

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TIE_RTOL", "pivot_columns"]
+__all__ = ["TIE_RTOL", "pivot_columns", "largest"]
 
 TIE_RTOL = 1e-8
 """Two pivot scores within this relative distance of each other are equal.
@@ -90,3 +90,21 @@ def _reflect(work: np.ndarray, step: int, j: int, remaining: list[int]) -> None:
         return
     cols = work[step:, remaining]
     work[step:, remaining] = cols - np.outer(v, (v @ cols) * (2.0 / vv))
+
+
+def largest(values, limit: int, *, floor: float = 0.0, rtol: float = TIE_RTOL) -> list[int]:
+    """Indices of the at most `limit` largest `values` above `floor`, largest first;
+    values within `rtol` (relative) of each other tie and go in index order.
+
+    For lists of suspects in messages: equal weights (a symmetric mechanism) are listed
+    the same way on every machine.
+    """
+    w = np.array(values, dtype=float).ravel()
+    w[~np.isfinite(w)] = 0.0
+    open_ = list(np.flatnonzero(w > floor))
+    out: list[int] = []
+    while open_ and len(out) < limit:
+        top = max(w[i] for i in open_)
+        pos = next(p for p, i in enumerate(open_) if w[i] >= top * (1.0 - rtol))
+        out.append(int(open_.pop(pos)))
+    return out

@@ -18,7 +18,7 @@ import numpy as np
 
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
-from mechatron.compiler.pivoting import pivot_columns
+from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
 
 __all__ = ["Lowered", "lower"]
@@ -309,11 +309,14 @@ def _check_selection(name, res, orig, var_syms, var_names, block, guess) -> None
                      dtype=float).reshape(len(eqs), len(cols))
     if not _singular(value):
         return
-    u, _, vt = np.linalg.svd(value)
-    suspects = [str(orig[eqs[i]]) for i in np.argsort(-np.abs(u[:, -1]))[:6]
-                if abs(u[i, -1]) > 1e-3]
-    vs = [var_names[cols[j]] for j in np.argsort(-np.abs(vt[-1]))[:8]
-          if abs(vt[-1, j]) > 1e-3]
+    # each equation's and variable's share of the (numerical) null space: the diagonal of
+    # its projector, which does not depend on the basis LAPACK returns for it
+    u, s, vt = np.linalg.svd(value)
+    rank = min(int(np.sum(s > 1e-10 * max(1.0, s[0]))), len(s) - 1)
+    left = np.sqrt(np.sum(u[:, rank:] ** 2, axis=1))
+    right = np.sqrt(np.sum(vt[rank:] ** 2, axis=0))
+    suspects = [str(orig[eqs[i]]) for i in largest(left, 6, floor=1e-3)]
+    vs = [var_names[cols[j]] for j in largest(right, 8, floor=1e-3)]
     _raise_singular_selection(name, suspects, vs)
 
 
