@@ -65,6 +65,20 @@ def double_pendulum_spec(l1=1.0, l2=1.0, m1=1.0, m2=1.0, alpha1=math.pi / 2,
     return "double_pendulum", spec, links
 
 
+def pendulum_chain_spec(n, angles=(0.3, 0.1, -0.2, 0.4)):
+    """``n`` point masses on massless rods of 1 m, each hanging from the one before."""
+    spec = {"world": lambda: parts.World()}
+    links, prev = [], "world.frame"
+    for k in range(n):
+        spec[f"j{k}"] = lambda a=angles[k % len(angles)]: joints.Revolute(q=a, w=0.0)
+        spec[f"rod{k}"] = lambda: parts.RigidTransform(ry=-1.0)
+        spec[f"m{k}"] = lambda: parts.PointMass(m=1.0)
+        links += [(prev, f"j{k}.frame_a"), (f"j{k}.frame_b", f"rod{k}.frame_a"),
+                  (f"rod{k}.frame_b", f"m{k}.frame")]
+        prev = f"m{k}.frame"
+    return f"pendulum_chain_{n}", spec, links
+
+
 def four_bar_spec(a=0.2, b=0.6, c=0.5, d=0.6, theta0=math.pi / 3):
     """The torque-driven four-bar of `mechanisms.four_bar`, as parts and links."""
     phi2, phi3 = four_bar_angles(theta0, a, b, c, d)
@@ -129,6 +143,8 @@ MODELS = {
     # name: (spec, the states the rule gives)
     "double pendulum": (double_pendulum_spec(), ["j1.q", "j1.w", "j2.q", "j2.w"]),
     "four-bar": (four_bar_spec(), ["j1.q", "j1.w"]),
+    "chain of four pendulums": (pendulum_chain_spec(4),
+                                sorted(f"j{k}.{v}" for k in range(4) for v in "qw")),
     "geared inertias": (geared_inertias_spec(), ["inertia1.w"]),
     "capacitor on a source": (capacitor_on_source_spec(), ["c2.v"]),
 }
