@@ -115,7 +115,8 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     hints = {n: v.hint for n, v in flat.variables.items() if v.hint}
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
-                ctx.time, start_guess, hints, preference=_state_preference(flat, alias))
+                ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
+                declared={n: i for i, n in enumerate(flat.variables)})
     lap("structure")
 
     # every logged variable as an expression of the unknowns

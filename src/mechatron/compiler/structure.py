@@ -18,6 +18,7 @@ import numpy as np
 
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
+from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
 
 __all__ = ["Lowered", "lower"]
@@ -52,7 +53,8 @@ def _csr(expr: ca.SX, syms: ca.SX) -> list[list[int]]:
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
           syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
           start_guess, hints: dict[str, str],
-          preference: dict[str, float] | None = None) -> Lowered:
+          preference: dict[str, float] | None = None,
+          declared: dict[str, int] | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
@@ -72,6 +74,20 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         of the state-selection Jacobian are scaled by ``10**(-3*preference)`` before the
         pivoted QR, so a preferred variable is made dummy only when no other choice is
         nonsingular.
+    declared : dict, optional
+        Declaration order of each unknown (its place in the flat model); an exact tie in
+        state selection keeps the unknown declared first as a state. Default: the order
+        of `unknowns`.
+
+    Notes
+    -----
+    State selection depends on the numbers only where they differ: the pivoted QR
+    (`mechatron.compiler.pivoting.pivot_columns`) treats residual column norms within
+    a relative `TIE_RTOL` as equal and gives the tie to the candidate that
+    `dummy_derivatives` ranks first (preference, then derivatives created by index
+    reduction, then derivative order, then later declaration, see `declared`). The
+    states, equations and generated code are then the same whatever
+    BLAS kernel evaluates the Jacobian.
     """
     # -- variables of the structural problem: unknowns and their derivatives -------------
     var_syms: list[ca.SX] = [syms[n] for n in unknowns]
@@ -144,17 +160,19 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         fun = ca.Function("jac_select", free, [jac])
         value = np.array(fun.call(guess(free))[0], dtype=float)
         value = np.atleast_2d(value).reshape(len(eqs), len(candidates))
-        from scipy.linalg import qr
         scale = np.array([10.0 ** (-3.0 * weight(c)) for c in candidates])
-        _, _, piv = qr(value * scale, pivoting=True)
-        chosen = piv[:k]
+        chosen = pivot_columns(value * scale, k)
         if pref and k and _singular(value[:, chosen]):
             _raise_singular_selection(name, [orig[e] for e in eqs],
                                       [var_names[c] for c in candidates])
         return [candidates[j] for j in chosen]
 
     priority = [-weight(v) for v in range(len(var_syms))] if pref else None
-    dummies = (set(dummy_derivatives(ir, select=select, priority=priority))
+    n_unknown = len(unknowns)
+    rank = ([declared.get(n, len(declared) + i) for i, n in enumerate(unknowns)]
+            if declared is not None else list(range(n_unknown)))
+    rank += range(n_unknown, ir.n_var_original)   # derivatives: their root's rank is read
+    dummies = (set(dummy_derivatives(ir, select=select, priority=priority, rank=rank))
                if differentiated else set())
     states = [v for v, d in enumerate(var_to_diff) if d != -1 and d not in dummies]
     is_state = [False] * len(var_syms)
@@ -291,11 +309,14 @@ def _check_selection(name, res, orig, var_syms, var_names, block, guess) -> None
                      dtype=float).reshape(len(eqs), len(cols))
     if not _singular(value):
         return
-    u, _, vt = np.linalg.svd(value)
-    suspects = [str(orig[eqs[i]]) for i in np.argsort(-np.abs(u[:, -1]))[:6]
-                if abs(u[i, -1]) > 1e-3]
-    vs = [var_names[cols[j]] for j in np.argsort(-np.abs(vt[-1]))[:8]
-          if abs(vt[-1, j]) > 1e-3]
+    # each equation's and variable's share of the (numerical) null space: the diagonal of
+    # its projector, which does not depend on the basis LAPACK returns for it
+    u, s, vt = np.linalg.svd(value)
+    rank = min(int(np.sum(s > 1e-10 * max(1.0, s[0]))), len(s) - 1)
+    left = np.sqrt(np.sum(u[:, rank:] ** 2, axis=1))
+    right = np.sqrt(np.sum(vt[rank:] ** 2, axis=0))
+    suspects = [str(orig[eqs[i]]) for i in largest(left, 6, floor=1e-3)]
+    vs = [var_names[cols[j]] for j in largest(right, 8, floor=1e-3)]
     _raise_singular_selection(name, suspects, vs)
 
 

@@ -38,7 +38,8 @@ Selector = Callable[[list[int], list[int], int], Sequence[int]]
 
 
 def dummy_derivatives(ir: IndexReduction, *, select: Selector | None = None,
-                      priority: Sequence[float] | None = None) -> list[int]:
+                      priority: Sequence[float] | None = None,
+                      rank: Sequence[int] | None = None) -> list[int]:
     """Choose the derivatives that become algebraic unknowns (dummy derivatives).
 
     Parameters
@@ -57,6 +58,11 @@ def dummy_derivatives(ir: IndexReduction, *, select: Selector | None = None,
         state". The value is read at the undifferentiated variable of each derivative
         chain (for ``der(der(x))`` it is ``priority[x]``), so a list over the original
         variables suffices; missing entries count as 0.
+    rank : sequence of int, optional
+        Declaration order per variable, read at the undifferentiated variable of each
+        chain like `priority`: among otherwise equal candidates, the one whose variable
+        was declared *later* (higher rank) is made dummy first. Default: the variable
+        index. Giving it keeps the choice when the variables are renumbered.
 
     Returns
     -------
@@ -84,20 +90,31 @@ def dummy_derivatives(ir: IndexReduction, *, select: Selector | None = None,
        derivatives of, keeping those that are themselves derivatives; the candidates
        become the integrals of the picked columns. Repeat from 2 until no row is left.
 
-    The default picker tries the candidates in order of preference: higher
-    `priority` first, then higher derivative order, then higher index, and keeps each
-    one that enlarges a matching of candidates to rows (a greedy basis of the
-    transversal matroid, so it always finds `k` when the rows are structurally
-    nonsingular). The order also reaches a custom `select`.
+    The candidates are ordered by a fixed rule, most preferred dummy first: higher
+    `priority`; then derivatives created by `pantelides` (index ``>=
+    ir.n_var_original``) before those of the original system, so that a variable whose
+    derivative the model itself uses stays a state; then higher derivative order; then
+    later declaration (higher `rank`). The order is total and independent of how
+    equations and variables are numbered when `rank` is given. The default picker
+    keeps each candidate, in this order, that enlarges a matching of candidates to rows
+    (a greedy basis of the transversal matroid, so it always finds `k` when the rows
+    are structurally nonsingular). A custom `select` receives the same order and
+    should give ties to the first candidate (see
+    `mechatron.compiler.pivoting.pivot_columns`).
     """
     root, order = derivative_chains(ir.var_to_diff)
     diff_to_var = ir.diff_to_var
     diff_to_eq = ir.diff_to_eq
     weights = list(priority) if priority is not None else []
+    ranks = list(rank) if rank is not None else list(range(ir.n_var))
+    if len(ranks) < ir.n_var_original:
+        raise ValueError(f"rank must give every original variable a rank "
+                         f"({ir.n_var_original}), got {len(ranks)}.")
 
-    def preference(v: int) -> tuple[float, int, int]:
+    def preference(v: int) -> tuple[float, bool, int, int]:
         x = root[v]
-        return (-(weights[x] if x < len(weights) else 0.0), -order[v], -v)
+        return (-(weights[x] if x < len(weights) else 0.0), v < ir.n_var_original,
+                -order[v], -ranks[x])
 
     def is_candidate(v: int) -> bool:
         return ir.var_to_diff[v] == UNMATCHED and diff_to_var[v] != UNMATCHED

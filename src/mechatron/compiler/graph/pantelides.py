@@ -44,6 +44,9 @@ class IndexReduction:
         original indices, then the differentiated equations in order of creation.
     n_var : int
         Number of variables of the extended system (original ones first).
+    n_var_original : int
+        Number of variables given to `pantelides`; those from this index on are the
+        derivatives it created.
     var_to_diff : list of int
         ``var_to_diff[v]`` is the variable standing for ``der(v)``, or -1.
     eq_to_diff : list of int
@@ -59,6 +62,7 @@ class IndexReduction:
 
     adj: list[list[int]]
     n_var: int
+    n_var_original: int
     var_to_diff: list[int]
     eq_to_diff: list[int]
     matching: Matching
@@ -193,6 +197,7 @@ class _Extension:
         self.var_to_eq = start.var_to_eq
         self.mark = [0] * n_var
         self.stamp = 0
+        self.n_var_original = n_var
 
     def match(self, k: int, max_rounds: int) -> None:
         """Match original equation `k`, differentiating as long as no path exists."""
@@ -267,6 +272,7 @@ class _Extension:
             if k:
                 counts.append((e, k))
         return IndexReduction(adj=self.adj, n_var=len(self.var_to_diff),
+                              n_var_original=self.n_var_original,
                               var_to_diff=self.var_to_diff, eq_to_diff=self.eq_to_diff,
                               matching=Matching(eq_to_var, var_to_eq),
                               differentiated=counts)
