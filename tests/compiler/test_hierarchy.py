@@ -323,3 +323,17 @@ def test_check_balance_agrees_with_the_compiler_on_the_database(entry):
     for variant in entry.variants:
         model = entry.build(variant)
         assert check_balance(model).balanced, (variant, check_balance(model).summary())
+
+
+def test_the_subsystem_example_of_the_modeling_guide_runs():
+    from pathlib import Path
+    text = (Path(__file__).parents[2] / "docs" / "modeling.md").read_text()
+    block = text.split("<!-- docs-example: subsystem -->", 1)[1]
+    code = block.split("```python", 1)[1].split("```", 1)[0]
+    namespace: dict = {}
+    exec(compile(code, "docs/modeling.md (subsystem example)", "exec"), namespace)
+    res = namespace["res"]                      # the tuned run: s2.R = 4 kOhm
+    exact = ladder_exact([1e3, 4e3], [1e-6, 1e-6], 1.0, [0.01])
+    assert res.final("s2.c.v") == pytest.approx(exact[0, 1], abs=1e-8)
+    assert res.final("s1.c.v") == pytest.approx(exact[0, 0], abs=1e-8)
+    assert res.final("s2.n.i") == pytest.approx(0.0, abs=1e-12)
