@@ -144,3 +144,33 @@ def test_system_rejects_part_names_that_shadow_its_methods():
         with pytest.raises(mt.errors.ModelError, match="method or attribute"):
             m.add(name, el.Resistor())
     m.add("r1", el.Resistor())
+
+
+def test_a_declaration_hiding_an_inherited_port_names_both():
+    from mechatron.library.electrical import OnePort
+    with pytest.raises(TypeError, match=r"Shadow: 'p' is declared as a Variable \(variable\) "
+                                        r"in Shadow, which would hide the port \(Pin\) 'p' "
+                                        r"declared in OnePort"):
+        class Shadow(OnePort):
+            p = mt.Variable("V", doc="A potential")
+
+
+def test_a_port_hiding_an_inherited_parameter_and_a_changed_kind_are_refused():
+    from mechatron.library.electrical import Pin, Resistor
+    with pytest.raises(TypeError, match=r"'R' is declared as a port \(Pin\) in Pinned, "
+                                        r"which would hide the Parameter"):
+        class Pinned(Resistor):
+            R = Pin(doc="A pin called R")
+    with pytest.raises(TypeError, match=r"'R' is declared as a Variable .* hide the "
+                                        r"Parameter \(parameter\) 'R' declared in Resistor"):
+        class Varied(Resistor):
+            R = mt.Variable("Ohm", doc="A resistance that varies")
+
+
+def test_a_parameter_declared_again_with_a_new_default_is_allowed():
+    from mechatron.library.electrical import Resistor
+
+    class Big(Resistor):
+        R = mt.Parameter("Ohm", default=1e6, doc="Resistance")
+
+    assert type(Big())._declarations["R"].default == 1e6

@@ -60,6 +60,30 @@ def _join(prefix: str, name: str) -> str:
     return f"{prefix}.{name}" if prefix else name
 
 
+def _kind(item) -> str:
+    if isinstance(item, Declaration):
+        return f"{type(item).__name__} ({item.kind})"
+    if isinstance(item, Connector):
+        return f"port ({type(item).__name__})"
+    return f"part ({type(item).__name__})"
+
+
+def _check_shadowing(cls, klass, key, new, old, old_owner) -> None:
+    """A name declared again in a subclass must keep its kind: a parameter may get a new
+    default, but a variable may not hide an inherited port (nor a port a parameter)."""
+    if old is None or old is new:
+        return
+    same = (isinstance(new, Declaration) and isinstance(old, Declaration)
+            and type(new) is type(old)) or \
+        (isinstance(new, Element) and isinstance(old, Element)
+         and type(new) is type(old))
+    if same:
+        return
+    raise TypeError(f"{cls.__name__}: '{key}' is declared as a {_kind(new)} in "
+                    f"{klass.__name__}, which would hide the {_kind(old)} '{key}' declared "
+                    f"in {old_owner.__name__}. Rename one of them.")
+
+
 class Element:
     """Common base of connectors and components: declarations, sub-elements, a path."""
 
@@ -72,13 +96,20 @@ class Element:
         cls._partial = partial
         decls: dict[str, Declaration] = {}
         templates: dict[str, Element] = {}
+        where: dict[str, type] = {}     # name -> the class that declared it last
         for klass in reversed(cls.__mro__):
             own = [(k, v) for k, v in vars(klass).items() if isinstance(v, Declaration)]
             for key, value in sorted(own, key=lambda kv: kv[1].order):
+                _check_shadowing(cls, klass, key, value, decls.get(key) or
+                                 templates.get(key), where.get(key))
                 decls[key] = value
+                where[key] = klass
             for key, value in vars(klass).items():
                 if isinstance(value, Element):
+                    _check_shadowing(cls, klass, key, value, decls.get(key) or
+                                     templates.get(key), where.get(key))
                     templates[key] = value
+                    where[key] = klass
         cls._declarations = decls
         cls._templates = templates
 

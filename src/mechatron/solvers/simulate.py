@@ -11,6 +11,7 @@ from mechatron.compiler.pipeline import compile_model
 from mechatron.core.component import Component
 from mechatron.errors import SimulationError
 from mechatron.results import SimResult, SolverStats
+from mechatron.solvers.diagnose import describe_nonfinite
 from mechatron.solvers.fixed import METHODS, integrate_fixed
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
@@ -136,11 +137,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     stats.wall_time = _time.perf_counter() - clock
     stats.compile_time = compile_time
     if not np.all(np.isfinite(Y[:, -1])):
-        bad = [cm.names[i] for i in np.nonzero(~np.isfinite(Y[:, -1]))[0][:5]]
-        raise SimulationError(f"model '{cm.name}': the solution is not finite at "
-                              f"t = {t[-1]:g} s ({', '.join(bad)}). The step may be too "
-                              "large for a fixed-step solver, or the model unstable.",
-                              path=cm.name, variables=bad)
+        _not_finite(cm, t, Y, Xf, p if ext is None else None)
     res = SimResult(t, Y, cm.names, cm.units, stats=stats, model_name=cm.name,
                     descriptions={n: d for n, d in zip(cm.names, cm.docs) if d})
     res.initialization = init_report
@@ -227,3 +224,33 @@ def _event_times(cm: CompiledModel, Xf: np.ndarray) -> dict[str, float]:
         if Xf[nx + nr + k] > 0:
             out[owner] = max(out.get(owner, -np.inf), float(Xf[nx + 2 * nr + k]))
     return out
+
+
+def _not_finite(cm: CompiledModel, t, Y, Xf, p) -> None:
+    """Raise the error for a run whose logged values stop being finite: from when, which
+    variables, and (replaying the model's functions at that point) which operation on
+    which values broke first."""
+    cols = np.nonzero(~np.all(np.isfinite(Y), axis=0))[0]
+    k = int(cols[0]) if cols.size else Y.shape[1] - 1
+    bad = [cm.names[i] for i in np.nonzero(~np.isfinite(Y[:, k]))[0][:5]]
+    cause = ""
+    if p is not None:
+        row = {n: i for i, n in enumerate(cm.names)}
+        xi = [row.get(n) for n in cm.state_names]
+        zi = [row.get(n) for n in cm.alg_names]
+        if None not in xi and None not in zi:
+            def point(j):
+                X = np.concatenate([Y[xi, j], np.asarray(Xf, dtype=float)[cm.nx:]])
+                return [t[j], X, Y[zi, j], p]
+            if np.all(np.isfinite(Y[xi, k])):     # states fine: an output broke
+                cause = describe_nonfinite(cm.f_out, point(k), cm.names, t[k])
+            elif k > 0:                           # states broke: their derivatives
+                cause = describe_nonfinite(cm.f_ode, point(k - 1),
+                                           [f"der({n})" for n in cm.state_names], t[k - 1])
+    hint = ("Check the parameters and the equation named." if cause else
+            "The step may be too large for a fixed-step solver, or the model unstable.")
+    raise SimulationError(f"model '{cm.name}': the solution is not finite from t = "
+                          f"{t[k]:g} s on ({', '.join(bad)})"
+                          + (f": {cause}" if cause else "") + f". {hint}",
+                          path=cm.name, variables=bad)
+
