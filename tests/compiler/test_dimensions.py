@@ -112,8 +112,9 @@ def test_every_problem_is_reported_once_and_together():
 
 def test_a_mismatch_inside_one_side_is_described():
     part = one_port("Ohm", equation=lambda s: s.v == s.q * s.i + s.i)
-    with pytest.raises(UnitError, match=r"Custom 'x1': v == \(\(q\*i\)\+i\): on the right "
-                                        r"side, it adds V \(kg\*m\^2/\(A\*s\^3\)\) and A\."):
+    with pytest.raises(UnitError, match=r"Custom 'x1': v == \(\(q\*i\)\+i\): on the "
+                                        r"right side, it adds V \(kg\*m\^2/\(A\*s\^3\)\) "
+                                        r"and A\."):
         mt.compile_model(circuit(part))
 
 
@@ -355,8 +356,8 @@ def test_every_library_component_is_dimensionally_consistent(info):
 
 def test_the_walk_catches_a_wrong_class():
     assert component_dimension_problems(WrongInductor) == [
-        "model 'WrongInductor': v == (L*i): the left side is V (kg*m^2/(A*s^3)), the right side "
-        "is Wb (kg*m^2/(A*s^2)). Is a der() missing?"]
+        "model 'WrongInductor': v == (L*i): the left side is V (kg*m^2/(A*s^3)), the right "
+        "side is Wb (kg*m^2/(A*s^2)). Is a der() missing?"]
 
 
 ENTRIES = [(e.name, v) for e in mt.models.list() for v in e.variants]

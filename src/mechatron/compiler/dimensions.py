@@ -281,7 +281,7 @@ def infer(f: ca.Function, in_dims: list) -> list:
     w: list = []
     consts: dict[int, float] = {}
     append = w.append
-    k_out = 0
+    out_nz = _casadi.Function_instruction_output     # [output, nonzero] of an output
     for k, op in enumerate(ids):
         arg = args[k]
         if op == _ADD or op == _SUB:
@@ -293,9 +293,7 @@ def infer(f: ca.Function, in_dims: list) -> list:
         elif op == _INPUT:
             append(in_dims[arg[1]])
         elif op == _OUTPUT:
-            if k_out < n_out:
-                out[k_out] = w[arg[0]]
-            k_out += 1
+            out[out_nz(f, k)[1]] = w[arg[0]]
         elif op == _CONST:
             consts[len(w)] = _casadi.Function_instruction_constant(f, k)
             append(NUMBER)
@@ -308,10 +306,12 @@ def infer(f: ca.Function, in_dims: list) -> list:
             append(_unary(op, w[arg[0]]))
         else:
             append(_binary(op, w[arg[0]], w[arg[1]], consts.get(arg[1])))
-    # without live-variable reuse every instruction writes the next slot and the outputs
-    # come in order; check both once rather than trusting it silently
-    last = max((k for k, op in enumerate(ids) if op != _OUTPUT), default=None)
-    if last is not None and f.instruction_output(last)[0] != len(w) - 1 or k_out != n_out:
+    # without live-variable reuse every instruction writes the next slot of the work
+    # vector; check it once rather than trusting it silently
+    last = n - 1
+    while last >= 0 and ids[last] == _OUTPUT:
+        last -= 1
+    if last >= 0 and f.instruction_output(last)[0] != len(w) - 1:
         raise RuntimeError("dimension check: unexpected CasADi work-vector layout; "
                            "please report this with the CasADi version.")
     return out

@@ -45,9 +45,10 @@ def compile_model(model: Component, *, name: str | None = None,
 def _compile(model: Component, name: str | None, dimensions: bool = True) -> CompiledModel:
     """Compile a model into a :class:`CompiledModel`.
 
-    Passes: flatten and connect; the dimension check of every equation; alias elimination; structural analysis with index
-    reduction (Pantelides, dummy derivatives); block-lower-triangular sorting with tearing
-    and symbolic solution; relations to event modes; lowering to CasADi functions.
+    Passes: flatten and connect; the dimension check of every equation (unless
+    ``dimensions`` is false); alias elimination; structural analysis with index reduction
+    (Pantelides, dummy derivatives); block-lower-triangular sorting with tearing and
+    symbolic solution; relations to event modes; lowering to CasADi functions.
     ``CompiledModel.report`` holds counts and timings of each pass.
     """
     timings: dict[str, float] = {}

@@ -77,7 +77,8 @@ class CartPendulumEquation(mt.Component):
                             + self.k_th * self.theta + self.k_w * self.w),
                 (M + m) * mt.der(self.v) + m * l * mt.der(self.w) * c
                 - m * l * self.w ** 2 * s == self.F - self.b * self.v,
-                m * l * mt.der(self.v) * c + m * l ** 2 * mt.der(self.w) - m * self.g * l * s == 0]
+                m * l * mt.der(self.v) * c + m * l ** 2 * mt.der(self.w)
+                - m * self.g * l * s == 0]
 
 
 def _equation(M, m, l, b, x_ref, theta0):

@@ -60,7 +60,8 @@ class DoublePendulumEquation(mt.Component):
         return [mt.der(self.alpha1) == self.w1,
                 mt.der(self.alpha2) == self.w2,
                 (m1 + m2) * l1 * mt.der(self.w1) + m2 * l2 * mt.der(self.w2) * ca.cos(d)
-                + m2 * l2 * self.w2 ** 2 * ca.sin(d) + (m1 + m2) * self.g * ca.sin(self.alpha1)
+                + m2 * l2 * self.w2 ** 2 * ca.sin(d)
+                + (m1 + m2) * self.g * ca.sin(self.alpha1)
                 == 0,
                 l2 * mt.der(self.w2) + l1 * mt.der(self.w1) * ca.cos(d)
                 - l1 * self.w1 ** 2 * ca.sin(d) + self.g * ca.sin(self.alpha2) == 0,
