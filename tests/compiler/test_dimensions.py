@@ -227,6 +227,41 @@ def test_signal_blocks_with_unitless_states_pass():
                                               rel=1e-6)
 
 
+def test_odes_without_units_pass_but_declared_units_are_checked():
+    """A component without ports whose variables are all of unit "1" is plain math (its
+    number coefficients may hide units): its variables are free. Declared units in such
+    a component are still checked."""
+
+    class Decay(mt.Component):
+        """``dx/dt = -a x``, ``y = x^2`` without units."""
+
+        a = mt.Parameter("1", default=2.0, doc="Rate (a number)")
+        x = mt.Variable(start=1.0, doc="State")
+        y = mt.Variable(doc="Its square")
+
+        def equations(self):
+            return [mt.der(self.x) == -self.a * self.x, self.y == self.x ** 2]
+
+    res = mt.simulate(Decay(), 1.0, rtol=1e-10, atol=1e-12)
+    assert res.final("y") == pytest.approx(math.exp(-4.0), rel=1e-7)
+
+    class Pendulum(mt.Component):
+        """``dv/dt = -T x / L`` with ``T`` declared as a force (wrong: per unit mass)."""
+
+        L = mt.Parameter("m", default=1.0, doc="Length")
+        x = mt.Variable("m", start=0.1, doc="Position")
+        v = mt.Variable("m/s", start=0.0, doc="Velocity")
+        T = mt.Variable("N", doc="Rod tension per unit mass")
+
+        def equations(self):
+            return [mt.der(self.x) == self.v, mt.der(self.v) == -self.T * self.x / self.L,
+                    self.T == 9.81]
+
+    assert component_dimension_problems(Pendulum) == [
+        "model 'Pendulum': der(v) == (-((T*x)/L)): the left side is m/s^2, the right side "
+        "is N (kg*m/s^2). Check the units declared for its variables and parameters."]
+
+
 def test_second_derivatives_and_time():
     class Falling(mt.Component):
         """``m x'' = -m g`` with ``x(t) = h - g t^2 / 2`` logged beside it."""

@@ -20,10 +20,12 @@ Rules, applied to the CasADi expression graph:
   compared with (``x == 0``, ``v + 1e-3``), and is dimensionless in a product.
 * A *free signal* is a wildcard too, in sums and in products (its dimension is unknown,
   as a Simulink signal carries none): a signal input or output declared with unit ``"1"``
-  (the default of causal blocks), and every variable of unit ``"1"`` of a *signal block*
-  (a component with signal inputs or outputs and no physical port: a transfer function's
-  states, a PID's integral). Parameters are never wildcards: a gain of unit ``"1"`` is
-  dimensionless. Signals with a unit (physical signals) are checked like any variable.
+  (the default of causal blocks), and every variable of unit ``"1"`` of a component
+  without physical ports (a signal block: a transfer function's states, a PID's
+  integral; or plain ODEs written without units). Parameters are never wildcards: a gain
+  of unit ``"1"`` is dimensionless. Variables of unit ``"1"`` of a component with
+  physical ports are dimensionless and checked; signals and variables declared with a
+  unit are checked everywhere.
 * Event actions (``sample``/``when``) are checked too: an assignment ``x := e`` as the
   equation ``x == e``, a ``when`` condition as a relation, a clock's period and offset
   as times.
@@ -330,20 +332,15 @@ class _Symbols:
 
     def __init__(self, flat):
         ctx = flat.context
-        signal_owner, physical_owner = set(), set()
-        for v in flat.variables.values():
-            if v.kind in ("input", "output"):
-                signal_owner.add(v.owner)
-            elif v.kind in ("across", "through"):
-                physical_owner.add(v.owner)
-        signal_blocks = signal_owner - physical_owner
+        physical = {v.owner for v in flat.variables.values()
+                    if v.kind == "across" or v.kind == "through"}
         syms, dims = [], []
         self.declared: dict[int, str] = {}
         by_name: dict[str, object] = {}
         for name, v in flat.variables.items():
             d = self._dim(v.unit)
-            if d == ONE and (v.kind in ("input", "output") or
-                             (v.kind == "variable" and v.owner in signal_blocks)):
+            if d == ONE and (v.kind == "input" or v.kind == "output" or
+                             (v.kind == "variable" and v.owner not in physical)):
                 d = FREE
             syms.append(v.sym)
             dims.append(d)
