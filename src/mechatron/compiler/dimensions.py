@@ -50,8 +50,12 @@ from fractions import Fraction
 from itertools import repeat
 
 import casadi as ca
-from casadi import _casadi
 
+from mechatron.compiler.flatten import (FlatModel, _bind_symbols, _collect_equations,
+                                        _walk)
+from mechatron.core.component import Component
+from mechatron.core.context import BuildContext
+from mechatron.core.events import Clock
 from mechatron.errors import UnitError
 from mechatron.units import dimensionality
 
@@ -138,8 +142,8 @@ def format_dimension(value: int) -> str:
 #: names for messages, first match wins after the units declared in the model
 _NAMED = ("V", "A", "Ohm", "S", "F", "H", "Wb", "T", "C", "W", "J", "N", "Pa", "kg",
           "m", "s", "m/s", "m/s^2", "1/s", "1/s^2", "m^2", "m^3", "m^3/s", "kg/m^3",
-          "kg*m^2", "N/m", "N*s/m", "K", "W/K", "J/K", "V/(m/s)", "V*s", "A/s", "V/s",
-          "N/A", "Pa*s", "m^3/Pa", "Pa/m^3*s")
+          "kg*m^2", "N/m", "N*s/m", "N*m*s", "K", "W/K", "J/K", "N/A", "A/s", "V/s",
+          "Pa*s", "m^3/Pa", "A/Wb", "H/m")
 
 
 @functools.lru_cache(maxsize=None)
@@ -165,6 +169,18 @@ _AGREE = {ca.OP_FMIN: "min", ca.OP_FMAX: "max", ca.OP_FMOD: "fmod",
 _RELATION = {ca.OP_LT: "<", ca.OP_LE: "<=", ca.OP_EQ: "==", ca.OP_NE: "!="}
 _LOGIC = {ca.OP_NOT, ca.OP_AND, ca.OP_OR}
 _INPUT, _CONST, _OUTPUT, _PARAM = ca.OP_INPUT, ca.OP_CONST, ca.OP_OUTPUT, ca.OP_PARAMETER
+
+# the instruction accessors, called once per instruction: CasADi's own entry points skip
+# the Python wrapper (about 1.5 times faster); the public methods otherwise
+try:
+    from casadi import _casadi
+    _OP_OF, _INPUTS_OF, _OUTPUTS_OF, _CONSTANT_OF = (
+        _casadi.Function_instruction_id, _casadi.Function_instruction_input,
+        _casadi.Function_instruction_output, _casadi.Function_instruction_constant)
+except (ImportError, AttributeError):     # pragma: no cover - other CasADi builds
+    _OP_OF, _INPUTS_OF, _OUTPUTS_OF, _CONSTANT_OF = (
+        ca.Function.instruction_id, ca.Function.instruction_input,
+        ca.Function.instruction_output, ca.Function.instruction_constant)
 _ADD, _SUB, _MUL, _DIV = ca.OP_ADD, ca.OP_SUB, ca.OP_MUL, ca.OP_DIV
 
 
@@ -276,14 +292,14 @@ def infer(f: ca.Function, in_dims: list) -> list:
     (int), :data:`NUMBER`, :data:`FREE`, or a tuple describing the first inconsistency
     met on the way (a *problem*, propagated to every output that depends on it)."""
     n = f.n_instructions()
-    ids = list(map(_casadi.Function_instruction_id, repeat(f, n), range(n)))
-    args = list(map(_casadi.Function_instruction_input, repeat(f, n), range(n)))
+    ids = list(map(_OP_OF, repeat(f, n), range(n)))
+    args = list(map(_INPUTS_OF, repeat(f, n), range(n)))
     n_out = f.nnz_out(0)
     out: list = [None] * n_out
     w: list = []
     consts: dict[int, float] = {}
     append = w.append
-    out_nz = _casadi.Function_instruction_output     # [output, nonzero] of an output
+    out_nz = _OUTPUTS_OF        # [output, nonzero] of an output instruction
     for k, op in enumerate(ids):
         arg = args[k]
         if op == _ADD or op == _SUB:
@@ -297,7 +313,7 @@ def infer(f: ca.Function, in_dims: list) -> list:
         elif op == _OUTPUT:
             out[out_nz(f, k)[1]] = w[arg[0]]
         elif op == _CONST:
-            consts[len(w)] = _casadi.Function_instruction_constant(f, k)
+            consts[len(w)] = _CONSTANT_OF(f, k)
             append(NUMBER)
         elif op == _DIV:
             a, b = w[arg[0]], w[arg[1]]
@@ -381,7 +397,6 @@ def _der(d):
 def _event_rows(flat) -> tuple[list, list]:
     """Event actions as extra rows: ``x - e`` for an assignment, the condition of a
     ``when``, ``period - time`` and ``offset - time`` of a clock."""
-    from mechatron.core.events import Clock
     rows, origins = [], []
     t = flat.context.time
     for action, owner in flat.events:
@@ -470,10 +485,6 @@ def component_dimension_problems(cls_or_instance) -> list[str]:
     A class is instantiated with its defaults; parameters without defaults are left
     without a value (values do not matter here).
     """
-    from mechatron.compiler.flatten import (FlatModel, _bind_symbols, _collect_equations,
-                                            _walk)
-    from mechatron.core.component import Component
-    from mechatron.core.context import BuildContext
     root = cls_or_instance() if isinstance(cls_or_instance, type) else cls_or_instance
     if not isinstance(root, Component):
         raise TypeError(f"component_dimension_problems: expected a Component, got "
