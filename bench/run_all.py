@@ -22,6 +22,7 @@ from _common import dumps, environment, log
 
 import bench_codegen
 import bench_dc_motor
+import bench_dimensions
 import bench_estimation
 import bench_multibody
 import bench_pwm
@@ -30,7 +31,8 @@ import bench_scaling
 
 BENCHMARKS = {"dc_motor": bench_dc_motor.run, "pwm": bench_pwm.run, "scaling": bench_scaling.run,
               "codegen": bench_codegen.run, "realtime": bench_realtime.run,
-              "multibody": bench_multibody.run, "estimation": bench_estimation.run}
+              "multibody": bench_multibody.run, "estimation": bench_estimation.run,
+              "dimensions": bench_dimensions.run}
 
 
 def _summary(results: dict) -> dict:
@@ -86,6 +88,11 @@ def _summary(results: dict) -> dict:
                    "simulate_s": mb[case]["mechatron"]["simulate"]["median_s"],
                    **{name: b["time"]["median_s"] for name, b in mb[case]["scipy"].items()}}
             for case in ("double_pendulum", "four_bar")}
+    dm = results.get("dimensions")
+    if dm and "error" not in dm:
+        out["dimensions"] = {"share_of_compile": {r["n"]: r["share_of_compile"]["median"]
+                                                  for r in dm["rows"]},
+                             "goal_share": dm["goal_share"]}
     cg = results.get("codegen")
     if cg and "error" not in cg:
         out["codegen"] = {"dc_motor_rk4_ns": cg["dc_motor_rk4_ns"], "goal_ns": cg["goal_ns"],

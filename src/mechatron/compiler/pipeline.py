@@ -10,6 +10,7 @@ import numpy as np
 
 from mechatron.compiler.alias import eliminate_aliases
 from mechatron.compiler.compiled import CompiledModel
+from mechatron.compiler.dimensions import check_dimensions as _check_dimensions
 from mechatron.compiler.events import Lowering as EventLowering
 from mechatron.compiler.events import clock_distances, direct_relations, prepare_events
 from mechatron.compiler.flatten import flatten
@@ -20,8 +21,13 @@ from mechatron.core.component import Component
 __all__ = ["compile_model"]
 
 
-def compile_model(model: Component, *, name: str | None = None) -> CompiledModel:
+def compile_model(model: Component, *, name: str | None = None,
+                  check_dimensions: bool = True) -> CompiledModel:
     """Compile a model into a :class:`CompiledModel` (see :func:`_compile`).
+
+    ``check_dimensions=False`` skips the dimension check of the equations
+    (:mod:`mechatron.compiler.dimensions`); a component class can opt out on its own with
+    the class attribute ``check_dimensions = False``.
 
     The cyclic garbage collector is paused while compiling: the passes allocate hundreds of
     thousands of short-lived wrappers and no cycles, and full collections over a growing
@@ -30,7 +36,7 @@ def compile_model(model: Component, *, name: str | None = None) -> CompiledModel
     enabled = gc.isenabled()
     gc.disable()
     try:
-        return _compile(model, name)
+        return _compile(model, name, check_dimensions)
     finally:
         if enabled:
             gc.enable()
@@ -67,12 +73,13 @@ def _logged_expressions(flat, alias) -> list:
     return out
 
 
-def _compile(model: Component, name: str | None) -> CompiledModel:
+def _compile(model: Component, name: str | None, dimensions: bool = True) -> CompiledModel:
     """Compile a model into a :class:`CompiledModel`.
 
-    Passes: flatten and connect; alias elimination; structural analysis with index
-    reduction (Pantelides, dummy derivatives); block-lower-triangular sorting with tearing
-    and symbolic solution; relations to event modes; lowering to CasADi functions.
+    Passes: flatten and connect; the dimension check of every equation (unless
+    ``dimensions`` is false); alias elimination; structural analysis with index reduction
+    (Pantelides, dummy derivatives); block-lower-triangular sorting with tearing and
+    symbolic solution; relations to event modes; lowering to CasADi functions.
     ``CompiledModel.report`` holds counts and timings of each pass.
     """
     timings: dict[str, float] = {}
@@ -88,6 +95,10 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     n_vars_flat = len(flat.variables)
     n_eqs_flat = len(flat.equations) + len(flat.aliases)
     lap("flatten")
+
+    if dimensions:
+        _check_dimensions(flat, model)
+        lap("dimensions")
 
     alias = eliminate_aliases(flat)
     lap("alias")

@@ -61,6 +61,7 @@ class CartPendulumEquation(mt.Component):
     k_v = mt.Parameter("N*s/m", default=0.0, doc="Feedback gain on the velocity")
     k_th = mt.Parameter("N/rad", default=0.0, doc="Feedback gain on the angle")
     k_w = mt.Parameter("N*s/rad", default=0.0, doc="Feedback gain on the angular velocity")
+    g = mt.Parameter("m/s^2", default=G, min=0, doc="Gravitational acceleration")
     x = mt.Variable("m", start=0.0, doc="Cart position")
     v = mt.Variable("m/s", start=0.0, doc="Cart velocity")
     theta = mt.Variable("rad", start=0.1, doc="Rod angle from the upright")
@@ -76,7 +77,8 @@ class CartPendulumEquation(mt.Component):
                             + self.k_th * self.theta + self.k_w * self.w),
                 (M + m) * mt.der(self.v) + m * l * mt.der(self.w) * c
                 - m * l * self.w ** 2 * s == self.F - self.b * self.v,
-                m * l * mt.der(self.v) * c + m * l ** 2 * mt.der(self.w) - m * G * l * s == 0]
+                m * l * mt.der(self.v) * c + m * l ** 2 * mt.der(self.w)
+                - m * self.g * l * s == 0]
 
 
 def _equation(M, m, l, b, x_ref, theta0):

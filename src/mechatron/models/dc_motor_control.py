@@ -18,7 +18,9 @@ entry since it is another controller, not another formulation) drives the voltag
 the speed PI directly, ``V = sat(Kp e_w + Ki x_w, V_max)``, with no current limit: keeping
 ``|i| <= 3 A`` is then a requirement for the gains (``mechatron optimize``).
 
-Both integrators have back-calculation anti-windup: ``dx/dt = e + (u_sat - u)/(K T_aw)``.
+Both integrators have back-calculation anti-windup: ``dx/dt = e + (u_sat - u)/(K T_aw)``
+with ``K`` the loop's proportional gain and ``T_aw`` a ratio (dimensionless): the
+tracking time constant is ``T_t = T_aw K / K_i``, ``T_aw`` times the integral time.
 The saturation is the smooth ``sat(x, a) = (sqrt((x + a)^2 + eps^2) -
 sqrt((x - a)^2 + eps^2)) / 2`` with ``eps = 1e-3 a``: it never exceeds ``a``, differs from a
 hard clamp by less than ``eps^2 / (4 (a - |x|))`` inside the band, and has no events (the
@@ -56,7 +58,8 @@ class _Drive(SeedMotor, partial=True):
     Kp = mt.Parameter("A*s/rad", default=0.03, min=0, doc="Speed PI proportional gain")
     Ki = mt.Parameter("A/rad", default=3.0, min=0, doc="Speed PI integral gain")
     w_c = mt.Parameter("rad/s", default=5000.0, min=0, doc="Current loop bandwidth")
-    T_aw = mt.Parameter("s", default=2e-3, min=0, doc="Anti-windup time constant")
+    T_aw = mt.Parameter("1", default=2e-3, min=0,
+                        doc="Anti-windup tracking time over the integral time K/K_i")
     i = mt.Variable("A", start=0.0, doc="Armature current")
     w = mt.Variable("rad/s", start=0.0, doc="Rotor speed")
     phi = mt.Variable("rad", start=0.0, doc="Rotor angle")
@@ -111,7 +114,8 @@ class DCMotorSpeedPIVoltage(SeedMotor):
     V_max = mt.Parameter("V", default=24.0, min=0, doc="Supply voltage limit")
     Kp = mt.Parameter("V*s/rad", default=0.05, min=0, doc="Speed PI proportional gain")
     Ki = mt.Parameter("V/rad", default=5.0, min=0, doc="Speed PI integral gain")
-    T_aw = mt.Parameter("s", default=2e-3, min=0, doc="Anti-windup time constant")
+    T_aw = mt.Parameter("1", default=2e-3, min=0,
+                        doc="Anti-windup tracking time over the integral time K/K_i")
     w_set = mt.Parameter("rad/s", default=100.0, doc="Speed reference step at t = 0")
     i = mt.Variable("A", start=0.0, doc="Armature current")
     w = mt.Variable("rad/s", start=0.0, doc="Rotor speed")

@@ -47,6 +47,7 @@ class DoublePendulumEquation(mt.Component):
     m2 = mt.Parameter("kg", default=1.0, min=0, doc="Mass of the second point mass")
     l1 = mt.Parameter("m", default=1.0, min=0, doc="Length of the first rod")
     l2 = mt.Parameter("m", default=1.0, min=0, doc="Length of the second rod")
+    g = mt.Parameter("m/s^2", default=G, min=0, doc="Gravitational acceleration")
     alpha1 = mt.Variable("rad", start=math.pi / 2, doc="Angle of rod 1 from the vertical")
     alpha2 = mt.Variable("rad", start=0.0, doc="Angle of rod 2 from the vertical")
     w1 = mt.Variable("rad/s", start=0.0, doc="Angular velocity of rod 1")
@@ -59,12 +60,13 @@ class DoublePendulumEquation(mt.Component):
         return [mt.der(self.alpha1) == self.w1,
                 mt.der(self.alpha2) == self.w2,
                 (m1 + m2) * l1 * mt.der(self.w1) + m2 * l2 * mt.der(self.w2) * ca.cos(d)
-                + m2 * l2 * self.w2 ** 2 * ca.sin(d) + (m1 + m2) * G * ca.sin(self.alpha1)
+                + m2 * l2 * self.w2 ** 2 * ca.sin(d)
+                + (m1 + m2) * self.g * ca.sin(self.alpha1)
                 == 0,
                 l2 * mt.der(self.w2) + l1 * mt.der(self.w1) * ca.cos(d)
-                - l1 * self.w1 ** 2 * ca.sin(d) + G * ca.sin(self.alpha2) == 0,
+                - l1 * self.w1 ** 2 * ca.sin(d) + self.g * ca.sin(self.alpha2) == 0,
                 self.E == energy(m1, m2, l1, l2, self.alpha1, self.alpha2, self.w1,
-                                 self.w2)]
+                                 self.w2, self.g)]
 
 
 class TotalEnergy(mt.Component):

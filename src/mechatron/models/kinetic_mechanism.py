@@ -55,6 +55,7 @@ class KineticMechanismEquation(mt.Component):
     l2 = mt.Parameter("m", default=0.4, min=0, doc="Length of link 2")
     l3 = mt.Parameter("m", default=0.4, min=0, doc="Length of link 3")
     tau = mt.Parameter("N*m", default=2.0, doc="Torque on joint 1")
+    g = mt.Parameter("m/s^2", default=G, min=0, doc="Gravitational acceleration")
     phi1 = mt.Variable("rad", start=0.0, doc="Absolute angle of link 1")
     phi2 = mt.Variable("rad", start=0.3, doc="Absolute angle of link 2")
     phi3 = mt.Variable("rad", start=0.6, doc="Absolute angle of link 3")
@@ -75,7 +76,7 @@ class KineticMechanismEquation(mt.Component):
         eqs = [mt.der(p) == v for p, v in zip(phi, w)]
         q = [self.tau, 0, 0]
         for i in range(N):
-            lhs = beyond[i] * G * l[i] * ca.cos(phi[i])
+            lhs = beyond[i] * self.g * l[i] * ca.cos(phi[i])
             for j in range(N):
                 s = beyond[max(i, j)] * l[i] * l[j]
                 lhs = lhs + s * (ca.cos(phi[i] - phi[j]) * mt.der(w[j])
@@ -87,7 +88,7 @@ class KineticMechanismEquation(mt.Component):
             vx = sum(-l[j] * ca.sin(phi[j]) * w[j] for j in range(k + 1))
             vy = sum(l[j] * ca.cos(phi[j]) * w[j] for j in range(k + 1))
             y = sum(l[j] * ca.sin(phi[j]) for j in range(k + 1))
-            energy = energy + 0.5 * m[k] * (vx ** 2 + vy ** 2) + m[k] * G * y
+            energy = energy + 0.5 * m[k] * (vx ** 2 + vy ** 2) + m[k] * self.g * y
         return eqs + [self.q2 == self.phi2 - self.phi1, self.q3 == self.phi3 - self.phi2,
                       mt.der(self.W) == self.tau * self.w1,
                       self.E_minus_W == energy - self.W]
@@ -108,7 +109,7 @@ def _multibody(m1, m2, m3, l1, l2, l3, tau, q1_0, q2_0, q3_0):
     meter = model.add("meter", WorkMeter())
     masses = [model.m1, model.m2, model.m3]
     model.add_equation(lambda: total.E == sum(b.E_kin + b.E_pot for b in masses))
-    model.add_equation(lambda: mt.der(meter.W) == tau * model.j1.w)
+    model.add_equation(lambda: mt.der(meter.W) == model.motor.tau_in * model.j1.w)
     model.add_equation(lambda: meter.E_minus_W == total.E - meter.W)
     return model
 

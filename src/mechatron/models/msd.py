@@ -82,15 +82,18 @@ class MSDEquation(mt.Component):
     mu = mt.Parameter("1", default=0.1, min=0, doc="Coulomb friction coefficient")
     F = mt.Parameter("N", default=10.0, doc="Applied force")
     alpha = mt.Parameter("rad", default=0.0, doc="Slope angle (pi/2: vertical)")
+    g = mt.Parameter("m/s^2", default=G, min=0, doc="Gravitational acceleration")
+    v_c = mt.Parameter("m/s", default=V_COULOMB, min=0,
+                       doc="Velocity regularising the Coulomb friction's sign")
     y = mt.Variable("m", start=0.0, doc="Displacement")
     v = mt.Variable("m/s", start=0.0, doc="Velocity")
 
     def equations(self):
-        g_along = self.m * G * ca.sin(self.alpha)
-        normal = self.m * G * ca.cos(self.alpha)
+        g_along = self.m * self.g * ca.sin(self.alpha)
+        normal = self.m * self.g * ca.cos(self.alpha)
         return [mt.der(self.y) == self.v,
                 self.m * mt.der(self.v) == self.F - self.k_s * self.y - self.b * self.v
-                + g_along - self.mu * normal * ca.tanh(self.v / V_COULOMB)]
+                + g_along - self.mu * normal * ca.tanh(self.v / self.v_c)]
 
 
 def _builders(alpha: float, with_force: bool, with_friction: bool):

@@ -132,6 +132,7 @@ class SolenoidEquation(mt.Component):
     x_max = mt.Parameter("m", default=4e-3, min=0, doc="Gap at the back stop")
     k_stop = mt.Parameter("N/m", default=1e8, min=0, doc="Stop contact stiffness")
     d_stop = mt.Parameter("N*s/m", default=500.0, min=0, doc="Stop contact damping")
+    mu0 = mt.Parameter("H/m", default=MU0, min=0, doc="Vacuum permeability")
     i = mt.Variable("A", start=0.0, doc="Coil current")
     x = mt.Variable("m", start=3e-3, doc="Air gap")
     v = mt.Variable("m/s", start=0.0, doc="Gap rate dx/dt")
@@ -139,8 +140,8 @@ class SolenoidEquation(mt.Component):
     F = mt.Variable("N", doc="Magnetic force along +x (negative: closing)")
 
     def equations(self):
-        rm = self.R_fe + self.x / (MU0 * self.A)
-        dL_dx = -self.N ** 2 / (rm ** 2 * MU0 * self.A)
+        rm = self.R_fe + self.x / (self.mu0 * self.A)
+        dL_dx = -self.N ** 2 / (rm ** 2 * self.mu0 * self.A)
         return [self.L == self.N ** 2 / rm,
                 self.F == 0.5 * self.i ** 2 * dL_dx,
                 self.L * mt.der(self.i) == self.V - self.R * self.i

@@ -19,10 +19,15 @@ class MotorPlant(mt.Component):
     u = mt.Input("V", doc="Armature voltage")
     w = mt.Output("rad/s", start=0.0, doc="Speed")
     i = mt.Variable("A", start=0.0, doc="Current")
+    R_a = mt.Parameter("Ohm", default=R, doc="Armature resistance")
+    L_a = mt.Parameter("H", default=L, doc="Armature inductance")
+    k = mt.Parameter("V*s/rad", default=K, doc="Motor constant")
+    J_r = mt.Parameter("kg*m^2", default=J, doc="Rotor inertia")
+    B_v = mt.Parameter("N*m*s/rad", default=B, doc="Viscous friction")
 
     def equations(self):
-        return [L * mt.der(self.i) == self.u - R * self.i - K * self.w,
-                J * mt.der(self.w) == K * self.i - B * self.w]
+        return [self.L_a * mt.der(self.i) == self.u - self.R_a * self.i - self.k * self.w,
+                self.J_r * mt.der(self.w) == self.k * self.i - self.B_v * self.w]
 
 
 def pi_loop():

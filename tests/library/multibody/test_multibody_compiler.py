@@ -25,7 +25,7 @@ def pendulum_class(select):
         y = mt.Variable("m", doc="y")
         vx = mt.Variable("m/s", doc="x velocity")
         vy = mt.Variable("m/s", doc="y velocity")
-        T = mt.Variable("N", doc="Rod tension per unit mass")
+        T = mt.Variable("N/kg", doc="Rod tension per unit mass")
 
         def equations(self):
             return [self.x == self.L * ca.sin(self.th), self.y == -self.L * ca.cos(self.th),

@@ -35,12 +35,14 @@ class ExponentialDiode(OnePort):
     G_par = Parameter("S", default=1e-12, min=0, doc="Parallel (leakage) conductance")
     x_max = Parameter("1", default=40.0, min=0,
                       doc="Exponent v/(N*V_t) above which the characteristic is linear")
+    k_B = Parameter("J/K", default=K_BOLTZMANN, min=0, doc="Boltzmann constant")
+    q_e = Parameter("C", default=Q_ELECTRON, min=0, doc="Elementary charge")
     V_t = Variable("V", doc="Thermal voltage k_B*T/q")
 
     def equations(self):
         x = self.v / (self.N * self.V_t)
         core = ca.exp(ca.fmin(x, self.x_max)) * (1 + ca.fmax(x - self.x_max, 0))
-        return [self.V_t == K_BOLTZMANN * self.T / Q_ELECTRON,
+        return [self.V_t == self.k_B * self.T / self.q_e,
                 self.i == self.I_s * (core - 1) + self.G_par * self.v]
 
 

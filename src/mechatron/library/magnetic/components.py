@@ -37,9 +37,10 @@ class AirGapReluctance(TwoPort):
     g = Parameter("m", default=1e-3, min=0, doc="Length of the flux path (gap length)")
     area = Parameter("m^2", default=1e-4, min=0, doc="Cross-section area")
     mu_r = Parameter("1", default=1.0, min=0, doc="Relative permeability")
+    mu0 = Parameter("H/m", default=MU0, min=0, doc="Vacuum permeability")
 
     def equations(self):
-        return [self.mmf == self.g / (MU0 * self.mu_r * self.area) * self.phi]
+        return [self.mmf == self.g / (self.mu0 * self.mu_r * self.area) * self.phi]
 
 
 class VariableAirGapReluctance(TwoPort):
@@ -52,9 +53,10 @@ class VariableAirGapReluctance(TwoPort):
 
     g = Input("m", doc="Gap length")
     area = Parameter("m^2", default=1e-4, min=0, doc="Pole face area")
+    mu0 = Parameter("H/m", default=MU0, min=0, doc="Vacuum permeability")
 
     def equations(self):
-        return [self.mmf == self.g / (MU0 * self.area) * self.phi]
+        return [self.mmf == self.g / (self.mu0 * self.area) * self.phi]
 
 
 class EddyCurrent(TwoPort):

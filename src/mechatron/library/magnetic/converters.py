@@ -56,12 +56,13 @@ class ReluctanceForceActuator(TwoPort):
     rod = Flange(doc="Moving flange (armature)")
     case = Flange(doc="Fixed flange (yoke)")
     area = Parameter("m^2", default=1e-4, min=0, doc="Pole face area")
+    mu0 = Parameter("H/m", default=MU0, min=0, doc="Vacuum permeability")
     x = Variable("m", start=1e-3, doc="Gap length")
     F = Variable("N", doc="Magnetic force on the rod, positive when it opens the gap")
 
     def equations(self):
         return [der(self.x) == self.rod.v - self.case.v,
-                self.mmf == self.x / (MU0 * self.area) * self.phi,
-                self.F == -self.phi ** 2 / (2 * MU0 * self.area),
+                self.mmf == self.x / (self.mu0 * self.area) * self.phi,
+                self.F == -self.phi ** 2 / (2 * self.mu0 * self.area),
                 self.rod.f == -self.F,
                 self.rod.f + self.case.f == 0]

@@ -95,6 +95,8 @@ class BodyRadiation(TwoPort):
     """
 
     Gr = Parameter("m^2", default=1e-2, min=0, doc="Net radiation factor emissivity*area")
+    sigma = Parameter("W/(m^2*K^4)", default=SIGMA, min=0,
+                      doc="Stefan-Boltzmann constant")
 
     def equations(self):
-        return [self.Q == SIGMA * self.Gr * (self.A.T ** 4 - self.B.T ** 4)]
+        return [self.Q == self.sigma * self.Gr * (self.A.T ** 4 - self.B.T ** 4)]
