@@ -23,7 +23,7 @@ edge (``a = exp(-D T / tau_f)``, ``c = exp(-T / tau_f)``, ``T = 1/f``)::
 and its mean is exactly ``D V_pwm`` (no DC current flows into the capacitor).
 
 Variants: ``acausal`` (PWMVoltageSource, Resistor, Capacitor, VoltageSensor, Gain,
-ControlledVoltageSource, and the motor as the library's DCPermanentMagnetMotor subsystem) and ``equation`` (the three ODEs).
+ControlledVoltageSource, and the motor as the library's DCPermanentMagnet subsystem) and ``equation`` (the three ODEs).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from scipy.linalg import expm
 import mechatron as mt
 from mechatron.library import blocks
 from mechatron.library import electrical as el
-from mechatron.library import electromechanical as em
+from mechatron.library import machines
 from mechatron.library import rotational as rot
 from mechatron.models.dc_motor import SeedMotor
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
@@ -101,7 +101,7 @@ class HBridgeFilterAcausal(mt.Component):
     sense = el.VoltageSensor(doc="Analog input of the I/O card (ideal, no load)")
     bridge_gain = blocks.Gain(doc="Power stage gain V_bus / V_pwm")
     bridge = el.ControlledVoltageSource(doc="H-bridge, averaged (ideal power stage)")
-    motor = em.DCPermanentMagnetMotor(doc="The seed's DC motor (a library subsystem)")
+    motor = machines.DCPermanentMagnet(doc="The seed's DC motor (a library subsystem)")
     ground = el.ElectricalReference()
     bridge_ground = el.ElectricalReference()
     housing = rot.RotationalReference()
@@ -114,7 +114,7 @@ class HBridgeFilterAcausal(mt.Component):
                 mt.connect(self.bridge_gain.y, self.bridge.u),
                 mt.connect(self.bridge.p, self.motor.p),
                 mt.connect(self.motor.n, self.bridge.n, self.bridge_ground.port),
-                mt.connect(self.motor.B, self.housing.port)]
+                mt.connect(self.motor.support, self.housing.port)]
 
 
 class HBridgeFilterEquation(SeedMotor):

@@ -3,7 +3,7 @@ motor used twice, built from subsystems three levels deep.
 
 Each axis (:class:`MotorAxis`) is a subsystem with its own ports (armature pins ``p``,
 ``n`` and the support flange ``support``) holding a
-:class:`~mechatron.library.electromechanical.DCPermanentMagnetMotor` (itself a subsystem
+:class:`~mechatron.library.machines.DCPermanentMagnet` (itself a subsystem
 of resistor, inductor, EMF, rotor inertia and bearing friction) rigidly coupled to a load
 inertia with viscous load friction. Its parameters are the axis's own and are passed on
 to the motor and the load. The table applies a voltage step to each axis (``V_x``,
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import mechatron as mt
 from mechatron.library import electrical as el
-from mechatron.library import electromechanical as em
+from mechatron.library import machines
 from mechatron.library import rotational as rot
 from mechatron.library.electrical.interfaces import Pin
 from mechatron.library.rotational.interfaces import Flange
@@ -53,14 +53,14 @@ class MotorAxis(mt.Component):
     n = Pin(doc="Negative armature terminal")
     support = Flange(doc="Frame of the axis")
 
-    motor = em.DCPermanentMagnetMotor(R=R, L=L, k=k, J=J, B_v=B)
+    motor = machines.DCPermanentMagnet(R=R, L=L, k=k, J=J, B_v=B)
     load = rot.Inertia(J=J_load)
     load_friction = rot.RotationalDamper(D=D_load)
 
     def equations(self):
         return [mt.connect(self.p, self.motor.p), mt.connect(self.motor.n, self.n),
-                mt.connect(self.motor.A, self.load.port, self.load_friction.A),
-                mt.connect(self.motor.B, self.load_friction.B, self.support)]
+                mt.connect(self.motor.flange, self.load.port, self.load_friction.A),
+                mt.connect(self.motor.support, self.load_friction.B, self.support)]
 
 
 class TwoAxisTable(mt.Component):

@@ -5,7 +5,7 @@ from mechatron.library.electrical.interfaces import OnePort
 from mechatron.library.rotational.interfaces import TwoFlange
 from mechatron.library.translational.interfaces import Flange as TranslationalFlange
 
-__all__ = ["RotationalEMF", "TranslationalEMF", "DCPermanentMagnetMotor"]
+__all__ = ["RotationalEMF", "TranslationalEMF"]
 
 
 class RotationalEMF(OnePort, TwoFlange):
@@ -52,6 +52,3 @@ class TranslationalEMF(OnePort):
                 self.f == self.A.f,
                 self.v == self.k * self.v_rel,
                 self.f == -self.k * self.i]
-
-
-from mechatron.library.electromechanical.machines import DCPermanentMagnetMotor  # noqa: E402

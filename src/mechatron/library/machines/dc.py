@@ -1,5 +1,5 @@
-"""Electrical machines built as subsystems of library parts (Modelica's
-``Electrical.Machines``, Simscape's ``DC Motor``)."""
+"""DC machines built as subsystems of library parts (Modelica's
+``Electrical.Machines.BasicMachines.DCMachines``, Simscape's ``DC Motor``)."""
 
 from mechatron.core import Component, Parameter, connect
 from mechatron.library import electrical as el
@@ -8,10 +8,10 @@ from mechatron.library.electrical.interfaces import Pin
 from mechatron.library.electromechanical import RotationalEMF
 from mechatron.library.rotational.interfaces import Flange
 
-__all__ = ["DCPermanentMagnetMotor"]
+__all__ = ["DCPermanentMagnet"]
 
 
-class DCPermanentMagnetMotor(Component):
+class DCPermanentMagnet(Component):
     """Permanent-magnet brush DC machine: armature resistance and inductance, EMF, rotor
     inertia and viscous friction, as one part (a subsystem of library components).
 
@@ -20,12 +20,12 @@ class DCPermanentMagnetMotor(Component):
         v == R i + L di/dt + k w        (armature, v = p.v - n.v, i into p)
         J dw/dt == k i - B w - tau_L    (rotor; tau_L is the load torque taken at A)
 
-    with ``w = A.w - B.w``. The torque constant equals the back-EMF constant ``k`` (SI
-    units). Sign convention: a positive armature current drives the shaft ``A`` forward
-    relative to the support ``B``.
+    with ``w = flange.w - support.w``. The torque constant equals the back-EMF constant ``k`` (SI
+    units). Sign convention: a positive armature current drives the shaft ``flange``
+    forward relative to the ``support``.
 
     Limitations: the rotor inertia is referenced to the ground (library ``Inertia``), so
-    connect ``B`` to a fixed reference (a housing on a moving support is not modelled); no
+    connect ``support`` to a fixed reference (a housing on a moving support is not modelled); no
     brush drop, no saturation, no armature reaction; a constant field (for an
     electrically excited field use ``RotationalEMF`` with a controlled ``k``).
     """
@@ -40,8 +40,8 @@ class DCPermanentMagnetMotor(Component):
 
     p = Pin(doc="Positive armature terminal")
     n = Pin(doc="Negative armature terminal")
-    A = Flange(doc="Shaft")
-    B = Flange(doc="Support (housing); connect it to a rotational reference")
+    flange = Flange(doc="Shaft")
+    support = Flange(doc="Support (housing); connect it to a rotational reference")
 
     resistor = el.Resistor(R=R)
     inductor = el.Inductor(L=L)
@@ -54,5 +54,5 @@ class DCPermanentMagnetMotor(Component):
                 connect(self.resistor.n, self.inductor.p),
                 connect(self.inductor.n, self.emf.p),
                 connect(self.emf.n, self.n),
-                connect(self.emf.A, self.inertia.port, self.friction.A, self.A),
-                connect(self.emf.B, self.friction.B, self.B)]
+                connect(self.emf.A, self.inertia.port, self.friction.A, self.flange),
+                connect(self.emf.B, self.friction.B, self.support)]

@@ -7,22 +7,22 @@ import pytest
 
 import mechatron as mt
 from mechatron.library import electrical as el
-from mechatron.library import electromechanical as em
+from mechatron.library import machines
 from mechatron.library import rotational as rot
 
 
 class TwoMotors(mt.Component):
     s1 = el.DCVoltageSource(V=19.2)
     s2 = el.DCVoltageSource(V=12.0)
-    m1 = em.DCPermanentMagnetMotor()
-    m2 = em.DCPermanentMagnetMotor(R=3.0, k=0.1)
+    m1 = machines.DCPermanentMagnet()
+    m2 = machines.DCPermanentMagnet(R=3.0, k=0.1)
     g = el.ElectricalReference()
     f = rot.RotationalReference()
 
     def equations(self):
         return [mt.connect(self.s1.p, self.m1.p), mt.connect(self.s2.p, self.m2.p),
                 mt.connect(self.s1.n, self.s2.n, self.m1.n, self.m2.n, self.g.port),
-                mt.connect(self.m1.B, self.m2.B, self.f.port)]
+                mt.connect(self.m1.support, self.m2.support, self.f.port)]
 
 
 def test_the_motor_part_equals_the_seed_network_and_its_final_speed():
@@ -36,7 +36,7 @@ def test_the_motor_part_equals_the_seed_network_and_its_final_speed():
     assert res.final("m2.inertia.w") == pytest.approx(0.1 * 12.0 / (3.0 * B + 0.1 ** 2),
                                                       rel=1e-8)
     # the open shaft carries no torque out; the armature current enters at p
-    np.testing.assert_allclose(res["m1.A.tau"], 0.0, atol=1e-12)
+    np.testing.assert_allclose(res["m1.flange.tau"], 0.0, atol=1e-12)
     np.testing.assert_allclose(res["m1.p.i"], res["m1.inductor.i"], atol=1e-12)
 
 

@@ -1,0 +1,7 @@
+"""Electrical machines (Modelica's ``Electrical.Machines``): each one part with electrical
+pins, a shaft ``flange`` and a housing ``support``, built as a subsystem of library
+components."""
+
+from mechatron.library.machines.dc import DCPermanentMagnet
+
+__all__ = ["DCPermanentMagnet"]
