@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mechatron._io import atomic_path, save_figure
 from mechatron.errors import DataError, UnknownVariableError
 
 if TYPE_CHECKING:  # imported lazily at run time: they are only needed to export or plot
@@ -430,7 +431,7 @@ class SimResult:
         table = np.empty((self._t.size, len(self._names) + 1))
         table[:, 0] = self._t
         table[:, 1:] = self._values.T
-        with open(path, "w", newline="", encoding="utf-8") as fh:
+        with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
             csv.writer(fh, lineterminator="\n").writerow(["t", *self._names])
             np.savetxt(fh, table, fmt="%.17g", delimiter=",")
 
@@ -468,7 +469,8 @@ class SimResult:
         info = {"format": _FORMAT_VERSION, "model_name": self.model_name,
                 "stats": None if self.stats is None else self.stats.as_dict()}
         schema = pa.schema(fields, metadata={_METADATA_KEY: json.dumps(info)})
-        pq.write_table(pa.Table.from_arrays(columns, schema=schema), path)
+        with atomic_path(path) as tmp:
+            pq.write_table(pa.Table.from_arrays(columns, schema=schema), tmp)
 
     @classmethod
     def _load_parquet(cls, path: Path) -> SimResult:
@@ -569,7 +571,7 @@ class SimResult:
         if self.model_name:
             fig.suptitle(self.model_name)
         if path is not None:
-            fig.savefig(path, dpi=100)
+            save_figure(fig, path, dpi=100)
         return fig
 
     def animate(self, path: str | os.PathLike[str], **options: Any) -> Path:
