@@ -258,3 +258,17 @@ def test_demo_writes_plots_and_logs(capsys, tmp_path):
     assert all(p.read_bytes()[:4] == b"\x89PNG" for p in pngs)
     log = mt.SimResult.load(out_dir / "dc_motor_acausal.csv")
     assert log.final("inertia.w") == pytest.approx(W_FINAL, rel=1e-8)
+
+
+# ------------------------------------------------------------------ silently wrong values
+@pytest.mark.parametrize("value", ["R=7,1 ohm", "R=7,1"])
+def test_set_with_a_decimal_comma_is_an_error_not_71_ohm(capsys, value):
+    code, out, err = run(capsys, "simulate", "dc_motor", "--set", value)
+    assert code == 2 and out == ""
+    assert err.startswith("error: --set R: ") and "comma" in err and "'7.1" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_input_with_a_decimal_comma_is_an_error(capsys):
+    code, out, err = run(capsys, "simulate", "dc_motor", "--input", "u=3,5 V")
+    assert code == 2 and err.startswith("error: --input u: ") and "comma" in err

@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import json
+import logging
 import math
 import os
 import sys
@@ -51,6 +52,7 @@ from typing import Any
 import numpy as np
 
 import mechatron as mt
+from mechatron._io import save_figure
 from mechatron.errors import MechatronError
 from mechatron.models.compare import COMPARE_POINTS, compare_variants
 from mechatron.models.compare import relative as _relative
@@ -59,6 +61,7 @@ from mechatron.results import SUFFIXES as LOG_SUFFIXES
 from mechatron.results import SimResult
 from mechatron.solvers import METHODS as FIXED_STEP_METHODS
 from mechatron.solvers import SOLVERS
+from mechatron.units import check_number_text
 
 __all__ = ["main", "build_parser", "EXTENSIONS", "DEMO_STEPS", "DemoStep", "DemoRun", "CommandError",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE"]
@@ -192,6 +195,7 @@ def _parse_inputs(items: Sequence[str] | None) -> dict[str, object]:
         if value.lower().endswith(".csv"):
             inputs[key] = _input_table(key, Path(value))
         else:
+            check_number_text(value, f"--input {key}")
             try:
                 inputs[key] = float(value)
             except ValueError:
@@ -224,6 +228,7 @@ def _input_table(key: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _number_or_quantity(key: str, value: str) -> float | str:
+    check_number_text(value, f"--set {key}")
     try:
         number = float(value)
     except ValueError:
@@ -489,7 +494,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
     files: dict[str, str] = {}
     if out is not None:
-        cmp.figure().savefig(out, dpi=100)
+        save_figure(cmp.figure(), out, dpi=100)
         files["out"] = str(out)
 
     if args.json:
@@ -797,7 +802,7 @@ def _demo_startup_plot(d: DemoRun) -> Path:
     axis.grid(True, alpha=0.3)
     fig.suptitle(f"{d.name}: start-up, acausal vs ODE vs fixed-step RK4")
     path = d.out / f"{d.name}_startup.png"
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     return path
 
 
@@ -974,6 +979,12 @@ def _add_set(p: argparse.ArgumentParser) -> None:
                         "number is SI, or give a unit: --set \"L=340 uH\". Repeatable.")
 
 
+def _add_verbose(p: argparse.ArgumentParser, dest: str) -> None:
+    p.add_argument("-v", "--verbose", action="count", default=0, dest=dest,
+                   help="show what Mechatron does on stderr (-v: progress and files, "
+                        "-vv: details); warnings are always shown")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``mechatron`` command."""
     parser = argparse.ArgumentParser(
@@ -982,6 +993,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Errors are reported as one line on stderr (exit code 2 for bad input); "
                "set MECHATRON_DEBUG=1 for tracebacks.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {mt.__version__}")
+    _add_verbose(parser, "verbose")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     p = sub.add_parser("models", help="list the model database",
@@ -1047,6 +1059,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="directory for plots and logs (default: %(default)s)")
     p.set_defaults(func=cmd_demo)
     _add_extensions(sub)
+    for command in sub.choices.values():       # `mechatron simulate ... -v` works too
+        _add_verbose(command, "verbose_command")
     return parser
 
 
@@ -1068,6 +1082,37 @@ def _debug() -> bool:
     return os.environ.get("MECHATRON_DEBUG", "").strip() not in ("", "0")
 
 
+class _StderrHandler(logging.Handler):
+    """Records of the ``mechatron`` logger as lines on the current ``sys.stderr`` (looked
+    up at each record, so that redirections apply): ``warning: ...``, ``debug: ...``;
+    info records as they are."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = record.getMessage()
+            if record.levelno != logging.INFO:
+                text = f"{record.levelname.lower()}: {text}"
+            print(text, file=sys.stderr, flush=True)
+        except Exception:  # logging must never break the command
+            self.handleError(record)
+
+
+def _logging(verbosity: int) -> Callable[[], None]:
+    """Show the ``mechatron`` logger's records on stderr: warnings always, info with
+    ``-v``, debug with ``-vv``. Returns the function that undoes it."""
+    logger = logging.getLogger("mechatron")
+    level = (logging.WARNING, logging.INFO)[verbosity] if verbosity < 2 else logging.DEBUG
+    handler = _StderrHandler(level)
+    before = logger.level
+    logger.setLevel(level)
+    logger.addHandler(handler)
+
+    def undo() -> None:
+        logger.removeHandler(handler)
+        logger.setLevel(before)
+    return undo
+
+
 def _fail(message: str, code: int) -> int:
     if _debug():
         traceback.print_exc()
@@ -1085,6 +1130,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a usage error (already printed)
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    undo_logging = _logging(getattr(args, "verbose", 0)
+                            + getattr(args, "verbose_command", 0))
     try:
         return int(args.func(args) or EXIT_OK)
     except KeyboardInterrupt:
@@ -1100,6 +1147,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _fail(f"unexpected {type(exc).__name__}: {exc} (a bug in Mechatron; "
                      f"run with MECHATRON_DEBUG=1 for the traceback and report it)",
                      EXIT_FAILURE)
+    finally:
+        undo_logging()
 
 
 if __name__ == "__main__":
