@@ -272,3 +272,47 @@ def test_set_with_a_decimal_comma_is_an_error_not_71_ohm(capsys, value):
 def test_input_with_a_decimal_comma_is_an_error(capsys):
     code, out, err = run(capsys, "simulate", "dc_motor", "--input", "u=3,5 V")
     assert code == 2 and err.startswith("error: --input u: ") and "comma" in err
+
+
+# ---------------------------------------------------------------- crashes made clear errors
+def _one_line_exit_2(code, out, err):
+    assert code == 2 and out == ""
+    assert err.startswith("error: ") and err.count("\n") == 1 and "unexpected" not in err
+
+
+@pytest.mark.parametrize("text, what", [("", "an empty file"),
+                                        ("t,u\n", "a header and no rows")])
+def test_empty_input_csv_is_a_clear_error(capsys, tmp_path, text, what):
+    path = tmp_path / "u.csv"
+    path.write_text(text)
+    code, out, err = run(capsys, "simulate", "dc_motor", "--input", f"u={path}")
+    _one_line_exit_2(code, out, err)
+    assert f"--input u={path}: {what}" in err
+
+
+def test_a_tiny_fixed_step_is_refused_before_memory_runs_out(capsys):
+    code, out, err = run(capsys, "simulate", "dc_motor", "--solver", "rk4", "--dt", "1e-12")
+    _one_line_exit_2(code, out, err)
+    # 0.5 s (the experiment) / 1e-12 s = 5e11 steps
+    assert "--dt 1e-12 s with t_stop 0.5 s: 5e+11 fixed steps" in err
+    assert "at least 5e-08 s" in err
+    code, out, err = run(capsys, "simulate", "dc_motor", "--solver", "rk4", "--dt", "1e-7",
+                         "--t-stop", "2")
+    _one_line_exit_2(code, out, err)
+    assert "2e+07 fixed steps" in err
+
+
+def test_simulate_out_interrupted_keeps_the_previous_log(capsys, tmp_path, monkeypatch):
+    path = tmp_path / "run.csv"
+    code, _, err = run(capsys, "simulate", "dc_motor", "--out", str(path))
+    assert code == 0, err
+    before = path.read_bytes()
+
+    def interrupted(fh, *args, **kwargs):
+        fh.write("0,1,2\n")                     # half a table, then Ctrl-C
+        raise KeyboardInterrupt
+    monkeypatch.setattr(np, "savetxt", interrupted)
+    code, _, err = run(capsys, "simulate", "dc_motor", "--set", "V=12", "--out", str(path))
+    assert code == 130 and err == "error: interrupted.\n"
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]

@@ -55,6 +55,7 @@ import mechatron as mt
 from mechatron._io import save_figure
 from mechatron.errors import MechatronError
 from mechatron.models.compare import COMPARE_POINTS, compare_variants
+from mechatron.models.user import entry_for
 from mechatron.models.compare import relative as _relative
 from mechatron.models.compare import max_deviation as _max_deviation
 from mechatron.results import SUFFIXES as LOG_SUFFIXES
@@ -78,6 +79,11 @@ USER_ERRORS = (MechatronError, ValueError, TypeError, FileNotFoundError, FileExi
 
 class CommandError(MechatronError, ValueError):
     """A command-line argument that cannot be used as given."""
+
+
+#: Help of a NAME argument: what the commands accept as a model.
+MODEL_HELP = ("model: a database name (see `mechatron models`), a Python file "
+              "path/to/model.py[:ClassName] or package.module:ClassName")
 
 
 # ---------------------------------------------------------------------------- formatting
@@ -211,6 +217,11 @@ def _input_table(key: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if not path.is_file():
         raise CommandError(f"--input {key}={path}: no such file. Give a CSV file with a "
                            f"header row 't,{key}'.")
+    lines = [line for line in path.read_text(errors="replace").splitlines() if line.strip()]
+    if len(lines) < 2:
+        got = "an empty file" if not lines else "a header and no rows"
+        raise CommandError(f"--input {key}={path}: {got}; expected a header row 't,{key}' "
+                           "and at least one row of numbers.")
     try:
         data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
     except ValueError as exc:
@@ -236,6 +247,25 @@ def _number_or_quantity(key: str, value: str) -> float | str:
     if not math.isfinite(number):
         raise CommandError(f"--set {key}: expected a finite value, got {value!r}.")
     return number
+
+
+#: The most steps a fixed-step run of the command line may take: every step is kept in
+#: memory (states, and the logged variables computed from them).
+MAX_FIXED_STEPS = 10_000_000
+
+
+def check_step_count(dt: float, t_stop: float, limit: int = MAX_FIXED_STEPS) -> int:
+    """The number of fixed steps of ``t_stop / dt``; a :class:`CommandError` naming both
+    when it is above ``limit`` (the run would exhaust the memory, not finish)."""
+    if not (isinstance(t_stop, (int, float)) and math.isfinite(t_stop) and t_stop > 0):
+        return 0                       # simulate reports a bad t_stop itself
+    steps = t_stop / dt
+    if steps > limit:
+        raise CommandError(f"--dt {dt:g} s with t_stop {t_stop:g} s: {steps:.3g} fixed "
+                           f"steps, more than the {limit:,} a run may take (each step is "
+                           f"kept in memory). Give a larger --dt (at least "
+                           f"{t_stop / limit:.3g} s) or a shorter --t-stop.")
+    return int(math.ceil(steps))
 
 
 def _output_path(path: str | None, option: str, suffixes: Sequence[str]) -> Path | None:
@@ -300,6 +330,8 @@ class _Settings:
             raise CommandError(f"--dt: the step size must be a number > 0, got {dt!r}.")
         t_stop = getattr(args, "t_stop", None)
         t_stop = exp.t_stop if t_stop is None else t_stop
+        if fixed:
+            check_step_count(dt, t_stop)
         rtol = getattr(args, "rtol", None)
         atol = getattr(args, "atol", None)
         for option, value in (("--rtol", rtol), ("--atol", atol)):
@@ -389,7 +421,7 @@ def _labels(entry) -> list[str]:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     if args.json:
         _emit_json(_entry_dict(entry))
         return EXIT_OK
@@ -423,7 +455,7 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- simulate
 def cmd_simulate(args: argparse.Namespace) -> int:
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     params = _parse_sets(args.set, entry)
     variant = args.variant or entry.default_variant
     settings = _Settings.resolve(args, entry)
@@ -432,9 +464,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     inputs = _parse_inputs(args.input)
     model = entry.build(variant, **params)
+    outputs = dict(entry.output_paths(variant))
+    if not outputs:                 # a user's model that declares no variables: its states
+        model = mt.compile_model(model)
+        outputs = {name: name for name in model.state_names}
     res = mt.simulate(model, settings.t_stop, solver=settings.solver, dt=settings.dt,
                       rtol=settings.rtol, atol=settings.atol, inputs=inputs or None)
-    outputs = dict(entry.output_paths(variant))
     final = {label: res.final(path) for label, path in outputs.items()}
     units = {label: entry.output_units.get(label, res.units.get(path, ""))
              for label, path in outputs.items()}
@@ -483,7 +518,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------------- compare
 def cmd_compare(args: argparse.Namespace) -> int:
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     params = _parse_sets(args.set, entry)
     settings = _Settings.resolve(args, entry)
     out = _output_path(args.out, "--out", _figure_suffixes()) if args.out else None
@@ -1007,7 +1042,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Describe one model: parameters with units, defaults "
                                    "and sources; variants; outputs; experiment; expected "
                                    "values.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     _add_json(p)
     p.set_defaults(func=cmd_show)
 
@@ -1015,7 +1050,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Build, compile and simulate one variant of a model; "
                                    "print the final value of each output and the solver "
                                    "profile. Defaults come from the model's experiment.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--variant", metavar="V", help="variant to build (default: the first)")
     p.add_argument("--t-stop", type=float, metavar="T", help="end time in s")
     _add_set(p)
@@ -1043,7 +1078,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "experiment's solver and tolerances, and print the "
                                    "largest deviation of each output from the first "
                                    "variant.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--t-stop", type=float, metavar="T", help="end time in s")
     _add_set(p)
     p.add_argument("--out", metavar="FILE.png", help="write an overlay plot")

@@ -27,6 +27,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import difflib
+import io
 import json
 import os
 from collections.abc import Iterable, Mapping, Sequence
@@ -444,11 +445,15 @@ class SimResult:
                 raise DataError(f"{path}: the first column must be 't' (time in s), got "
                                 f"{got}.", path=str(path))
             names = [h.strip() for h in header[1:]]
-            try:
-                table = np.loadtxt(fh, dtype=float, delimiter=",", ndmin=2)
-            except ValueError as exc:
-                raise DataError(f"{path}: not a table of numbers under the header: {exc}",
-                                path=str(path)) from exc
+            rows = fh.read()
+        if not rows.strip():
+            raise DataError(f"{path}: no data under the header; a simlog has at least one "
+                            "row of numbers.", path=str(path))
+        try:
+            table = np.loadtxt(io.StringIO(rows), dtype=float, delimiter=",", ndmin=2)
+        except ValueError as exc:
+            raise DataError(f"{path}: not a table of numbers under the header: {exc}",
+                            path=str(path)) from exc
         if table.shape[1] != len(header):
             raise DataError(f"{path}: {len(header)} columns in the header but "
                             f"{table.shape[1]} in the data.", path=str(path))

@@ -7,14 +7,13 @@ the model parameter they set. Unknown keys are errors (a typo must not be ignore
 
 from __future__ import annotations
 
-import importlib
 import math
 import tomllib
 from pathlib import Path
 
 
 import mechatron as mt
-from mechatron.errors import DataError, ParameterError, UnitError
+from mechatron.errors import DataError, ModelError, ParameterError, UnitError
 from mechatron.estimation.data import Experiment, load_experiment
 from mechatron.units import _Q, check_number_text, to_si
 
@@ -356,22 +355,29 @@ def _check_requirement(c: _Checks, where: str, req) -> None:
 
 def build_model(cfg: dict):
     """The model named by ``[model] name``: a database entry (``"dc_motor"``, with
-    optional ``variant`` and ``set``) or ``"package.module:Callable"`` returning a model."""
+    optional ``variant`` and ``set``), a user's file (``"motor.py"`` or
+    ``"motor.py:ClassName"``, relative to the problem file) or ``"package.module:Class"``;
+    a class must be a concrete :class:`~mechatron.Component` subclass, checked before it
+    is called (see :mod:`mechatron.models.user`). ``set`` gives parameter values."""
+    from mechatron.models.user import component_class
+    where = cfg.get("_path", "config")
     spec = cfg.get("model", {})
     name = spec.get("name")
     if not name:
-        raise DataError(f"{cfg.get('_path', 'config')}: [model] needs a 'name': a database "
-                        "entry (see `mechatron models`) or 'module:Class'.")
-    if ":" in name:
-        module, _, attr = name.partition(":")
-        try:
-            obj = getattr(importlib.import_module(module), attr)
-        except (ImportError, AttributeError) as exc:
-            raise DataError(f"{cfg.get('_path')}: [model] name '{name}': cannot import "
-                            f"({exc}).") from None
-        return obj()
-    entry = mt.models.get(name)
-    return entry.build(spec.get("variant"), **spec.get("set", {}))
+        raise DataError(f"{where}: [model] needs a 'name': a database entry (see "
+                        "`mechatron models`), a file 'model.py[:Class]' or "
+                        "'package.module:Class'.", path=where)
+    try:
+        cls = component_class(name, base=cfg.get("_dir"))
+    except ModelError as exc:
+        raise ModelError(f"{where}: [model] name: {exc}", path=where) from None
+    if cls is None:
+        entry = mt.models.get(name)
+        return entry.build(spec.get("variant"), **spec.get("set", {}))
+    if "variant" in spec:
+        raise DataError(f"{where}: [model] variant: '{name}' is a class, which has no "
+                        "variants; remove the key.", path=where)
+    return cls(**spec.get("set", {}))
 
 
 def _value(raw, unit: str, where: str) -> float:

@@ -247,7 +247,14 @@ class Experiment:
         path = Path(path)
         if not path.exists():
             raise DataError(f"{path}: no such file.", path=str(path))
-        df = pd.read_csv(path)
+        try:
+            df = pd.read_csv(path)
+        except pd.errors.EmptyDataError:
+            raise DataError(f"{path}: the file is empty; expected a header row (t and the "
+                            "signals) and rows of numbers.", path=str(path)) from None
+        except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+            raise DataError(f"{path}: cannot read it as CSV ({exc}).",
+                            path=str(path)) from None
         return cls.from_frame(df, source=str(path), **kwargs)
 
     @classmethod
@@ -257,7 +264,11 @@ class Experiment:
         path = Path(path)
         if not path.exists():
             raise DataError(f"{path}: no such file.", path=str(path))
-        df = pd.read_parquet(path)
+        try:
+            df = pd.read_parquet(path)
+        except Exception as exc:    # pyarrow raises several types for a broken file
+            raise DataError(f"{path}: cannot read it as Parquet ({exc}).",
+                            path=str(path)) from None
         return cls.from_frame(df, source=str(path), **kwargs)
 
 

@@ -362,7 +362,14 @@ def evaluate(problem, names, X, *, workers: int | None = None, address: str | No
     out = np.full((n, len(requirement_names(problem))), np.nan)
     done = 0
     if address:
-        from dask.distributed import Client        # optional dependency
+        try:
+            from dask.distributed import Client    # optional dependency
+        except ImportError as exc:
+            raise ParameterError(f"sensitivity: evaluating on the Dask cluster at "
+                                 f"{address} needs dask.distributed, which cannot be "
+                                 f"imported ({exc}); install it (pip install "
+                                 "\"dask[distributed]\") or give no address to use local "
+                                 "processes.") from None
         with Client(address) as client:
             remote = client.scatter(problem, broadcast=True)
             futures = [client.submit(_evaluate, remote, T[blk]) for blk in blocks]
