@@ -316,3 +316,32 @@ def test_simulate_out_interrupted_keeps_the_previous_log(capsys, tmp_path, monke
     assert code == 130 and err == "error: interrupted.\n"
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]
+
+
+# ---------------------------------------------------------------------------------- logging
+def test_verbose_shows_what_is_written_and_warnings_show_without_it(capsys, tmp_path,
+                                                                     monkeypatch):
+    import logging
+    from mechatron import cli
+    path = tmp_path / "run.csv"
+    for argv in (["-v", "simulate", "dc_motor", "--out", str(path)],
+                 ["simulate", "dc_motor", "--out", str(path), "--verbose"]):
+        code, out, err = run(capsys, *argv)
+        assert code == 0 and f"wrote {path}" in err.splitlines()
+    code, out, err = run(capsys, "simulate", "dc_motor", "--out", str(path))
+    assert code == 0 and err == ""          # quiet by default
+
+    def models(args):                       # a command whose library code logs
+        logger = logging.getLogger("mechatron.somewhere")
+        logger.warning("something to know")
+        logger.info("what it does")
+        logger.debug("details")
+        return 0
+    monkeypatch.setattr(cli, "cmd_models", models)
+    assert run(capsys, "models")[2] == "warning: something to know\n"
+    assert run(capsys, "-v", "models")[2] == "warning: something to know\nwhat it does\n"
+    assert run(capsys, "models", "-vv")[2] == ("warning: something to know\nwhat it does\n"
+                                               "debug: details\n")
+    # the handler is removed after each command
+    assert not any(type(h).__name__ == "_StderrHandler"
+                   for h in logging.getLogger("mechatron").handlers)

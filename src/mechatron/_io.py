@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import logging
 import os
 import shutil
 import stat
@@ -23,6 +24,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 __all__ = ["atomic_path", "atomic_dir", "write_text", "write_bytes", "save_figure"]
+
+log = logging.getLogger(__name__)
 
 #: Temporary files and folders start with this, so that they are recognisable.
 TEMP_PREFIX = ".mechatron-tmp-"
@@ -73,6 +76,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         with open(tmp, "rb+") as fh:      # a full disk shows here at the latest
             os.fsync(fh.fileno())
         os.replace(tmp, path)
+        log.info("wrote %s", path)
     finally:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
@@ -128,6 +132,7 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
                 raise
         else:
             os.replace(tmp, path)
+        log.info("wrote folder %s", path)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)

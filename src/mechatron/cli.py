@@ -1,4 +1,4 @@
-"""The ``mechatron`` command (DESIGN.md §3).
+"""The ``mechatron`` command (also ``python -m mechatron``).
 
 Subcommands
 -----------

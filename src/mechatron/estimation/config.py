@@ -7,6 +7,7 @@ the model parameter they set. Unknown keys are errors (a typo must not be ignore
 
 from __future__ import annotations
 
+import logging
 import math
 import tomllib
 from pathlib import Path
@@ -19,6 +20,8 @@ from mechatron.units import _Q, check_number_text, to_si
 
 __all__ = ["load_config", "build_model", "build_estimation", "build_sensitivity",
            "build_response", "generate_bench_data"]
+
+log = logging.getLogger(__name__)
 
 _TOP = {"model", "experiments", "parameters", "fixed", "offsets", "free_x0",
         "virtual_bench", "options", "sensitivity", "requirements", "design", "simulation",
@@ -425,6 +428,8 @@ def generate_bench_data(cfg: dict, *, force: bool = False) -> list[Path]:
         if run not in ("locked_rotor", "voltage_step", "multi_step"):
             raise DataError(f"{cfg['_path']}: [virtual_bench] runs: unknown run '{run}'; "
                             "use locked_rotor, voltage_step or multi_step.")
+        log.info("virtual bench: generating %s (%s run, seed %s)", path, run,
+                 vb.get("seed", 0))
         exp = getattr(bench, run)()
         written.append(exp.save(path))
     return written

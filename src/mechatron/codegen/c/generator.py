@@ -1,4 +1,4 @@
-"""Standalone C99 from the fixed-step step function (DESIGN.md §2).
+"""Standalone C99 from the fixed-step step function (docs/realtime.md).
 
 The numerics come from :func:`mechatron.solvers.fixed.make_step`, the very CasADi
 function that the desktop fixed-step run evaluates, emitted by CasADi's code generator;
