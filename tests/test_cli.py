@@ -345,3 +345,16 @@ def test_verbose_shows_what_is_written_and_warnings_show_without_it(capsys, tmp_
     # the handler is removed after each command
     assert not any(type(h).__name__ == "_StderrHandler"
                    for h in logging.getLogger("mechatron").handlers)
+
+
+def test_a_full_disk_is_a_one_line_error_naming_the_file(capsys, tmp_path, monkeypatch):
+    import errno
+    path = tmp_path / "run.csv"
+
+    def full(fh, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(np, "savetxt", full)
+    code, out, err = run(capsys, "simulate", "dc_motor", "--out", str(path))
+    assert code == 2 and out == ""
+    assert err == f"error: [Errno 28] No space left on device: '{path}'\n"
+    assert list(tmp_path.iterdir()) == []

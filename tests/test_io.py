@@ -208,3 +208,20 @@ def test_diagram_interrupted_keeps_the_previous_file(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         diagram.write_diagram(_rc(), path)
     assert path.read_text() == "<svg>previous</svg>" and _listing(tmp_path) == ["rc.svg"]
+
+
+def test_a_folder_that_cannot_be_written_is_named_not_the_temporary_file(tmp_path):
+    missing = tmp_path / "no" / "such" / "folder"
+    with pytest.raises(FileNotFoundError) as info:
+        write_text(missing / "x.txt", "x")
+    assert info.value.filename == str(missing / "x.txt")
+    with pytest.raises(FileNotFoundError) as info:
+        with atomic_dir(missing / "gen"):
+            pass
+    assert info.value.filename == str(missing / "gen")
+    # a full disk while writing: the error names the destination too
+    with pytest.raises(OSError) as info:
+        with atomic_path(tmp_path / "big.bin"):
+            raise OSError(errno.ENOSPC, "No space left on device", "/tmp/whatever")
+    assert info.value.errno == errno.ENOSPC and info.value.filename == str(tmp_path / "big.bin")
+    assert _listing(tmp_path) == []

@@ -21,8 +21,8 @@ the human summary.
 Exit codes and errors
 ---------------------
 0 on success; 2 for a usage error (argparse) or a problem with the user's input (any
-:class:`~mechatron.errors.MechatronError`, :class:`ValueError`, :class:`TypeError`, a
-missing file or directory), reported as one line ``error: <message>`` on stderr; 1 for an
+:class:`~mechatron.errors.MechatronError`, :class:`ValueError`, :class:`TypeError`, an
+:class:`OSError` such as a missing file or folder or a full disk), reported as one line ``error: <message>`` on stderr; 1 for an
 unexpected error (a bug), also one line, or for a demo whose checks failed. Set
 ``MECHATRON_DEBUG=1`` to get the traceback as well.
 
@@ -73,8 +73,8 @@ EXIT_USAGE = 2       # bad arguments or bad input (argparse's own code for usage
 
 
 #: Exceptions that mean "the input is wrong", not "Mechatron is wrong".
-USER_ERRORS = (MechatronError, ValueError, TypeError, FileNotFoundError, FileExistsError,
-               NotADirectoryError, IsADirectoryError, PermissionError)
+#: ``OSError`` covers the environment as well: a full disk, a folder that cannot be written.
+USER_ERRORS = (MechatronError, ValueError, TypeError, OSError)
 
 
 class CommandError(MechatronError, ValueError):

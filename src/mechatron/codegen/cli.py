@@ -93,6 +93,8 @@ def _resolve(args):
     if args.iterations < 1:
         raise CommandError(f"--iterations: at least 1, got {args.iterations}.")
     t_stop = args.t_stop if args.t_stop is not None else entry.experiment.t_stop
+    if not (np.isfinite(t_stop) and t_stop > 0):
+        raise CommandError(f"--t-stop: the end time must be a number > 0, got {t_stop!r}.")
     check_step_count(float(dt), t_stop)      # the harness run and the desktop comparison
     model = entry.build(variant, **params)
     return entry, variant, params, float(dt), float(t_stop), model
