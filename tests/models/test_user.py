@@ -129,3 +129,36 @@ def test_problem_file_refuses_os_abort_and_accepts_a_user_file(tmp_path, capsys,
     import mechatron as mt
     res = mt.simulate(model, 5e-3)
     assert res.final("v") == pytest.approx(2.0 * (1 - math.exp(-2.5)), rel=1e-5)
+
+
+NETWORK = textwrap.dedent('''
+    import mechatron as mt
+    from mechatron.library import electrical as el
+
+
+    class Charge(mt.Component):
+        """A network of library parts with no variables of its own."""
+        experiment = {"t_stop": 5e-3}
+        src = el.DCVoltageSource(V=2.0)
+        r1 = el.Resistor(R="1 kohm")
+        c1 = el.Capacitor(C="1 uF")
+        g = el.ElectricalReference()
+
+        def equations(self):
+            return [mt.connect(self.src.p, self.r1.p), mt.connect(self.r1.n, self.c1.p),
+                    mt.connect(self.src.n, self.c1.n, self.g.port)]
+''')
+
+
+def test_a_network_file_is_described_by_its_states(tmp_path, capsys):
+    path = tmp_path / "charge.py"
+    path.write_text(NETWORK)
+    entry = entry_for(str(path))
+    assert entry.outputs == {"model": {"c1.v": "c1.v"}} and entry.output_units == {"c1.v": "V"}
+    code, out, err = run(capsys, "simulate", str(path), "--json")
+    assert code == 0, err
+    assert json.loads(out)["final"]["c1.v"] == pytest.approx(2 * (1 - math.exp(-5)),
+                                                             rel=1e-5)
+    code, out, err = run(capsys, "report", str(path), "--out", str(tmp_path / "r.html"))
+    assert code == 0, err
+    assert f"<title>{path}" in (tmp_path / "r.html").read_text()

@@ -14,8 +14,8 @@ two more forms are:
 
 :func:`entry_for` turns either into a :class:`~mechatron.models.ModelEntry` (one variant,
 named ``model``), so that the commands treat it like a database entry: ``--set`` sets
-the class's own parameters, the outputs are its own variables (or its states when it
-declares none), and the experiment is the class attribute ``experiment`` (a dict of
+the class's own parameters, the outputs are its own variables (or, when it declares none,
+the states of its default build), and the experiment is the class attribute ``experiment`` (a dict of
 :class:`~mechatron.models.Experiment` fields, e.g. ``{"t_stop": 0.5}``; default: 1 s).
 """
 
@@ -207,11 +207,22 @@ def entry_from_class(cls: type[Component], *, name: str | None = None,
         return cls(**{k: v for k, v in values.items()
                       if not (k in required and isinstance(v, float) and math.isnan(v))})
 
+    if not outputs and not required:
+        # no variables of its own (a network of parts): its states stand for it
+        from mechatron.compiler import compile_model
+        cm = compile_model(build(**{k: p.default for k, p in params.items()}))
+        outputs = {name: name for name in cm.state_names}
+        units = dict(zip(cm.state_names, _state_units(cm)))
     doc = inspect.getdoc(cls) or cls.__name__
     return ModelEntry(name=name or cls.__name__, description=doc.split("\n\n")[0],
                       parameters=params, variants={VARIANT: build},
                       outputs={VARIANT: outputs}, output_units=units, experiment=exp,
                       tags=("user",))
+
+
+def _state_units(cm) -> list[str]:
+    units = dict(zip(cm.names, cm.units))
+    return [units.get(name, "") for name in cm.state_names]
 
 
 def entry_for(spec: str) -> ModelEntry:
