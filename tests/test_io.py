@@ -225,3 +225,25 @@ def test_a_folder_that_cannot_be_written_is_named_not_the_temporary_file(tmp_pat
             raise OSError(errno.ENOSPC, "No space left on device", "/tmp/whatever")
     assert info.value.errno == errno.ENOSPC and info.value.filename == str(tmp_path / "big.bin")
     assert _listing(tmp_path) == []
+
+
+def test_leftovers_of_a_killed_writer_are_removed_when_old(tmp_path):
+    import time
+    stale = tmp_path / f"{_io.TEMP_PREFIX}result-abc123.txt"
+    fresh = tmp_path / f"{_io.TEMP_PREFIX}result-def456.txt"
+    other = tmp_path / f"{_io.TEMP_PREFIX}other-abc123.txt"
+    stale_dir = tmp_path / f"{_io.TEMP_PREFIX}gen-xyz"
+    for p in (stale, fresh, other):
+        p.write_text("half")
+    (stale_dir / "sub").mkdir(parents=True)
+    old = time.time() - 2 * _io.STALE_AFTER
+    for p in (stale, other, stale_dir):
+        os.utime(p, (old, old))
+    write_text(tmp_path / "result.txt", "new")
+    # the old leftover of this name goes; a young one (a writer at work?) and the
+    # leftovers of other names stay
+    assert _listing(tmp_path) == sorted([fresh.name, other.name, stale_dir.name,
+                                         "result.txt"])
+    with atomic_dir(tmp_path / "gen") as tmp:
+        (tmp / "a.c").write_text("")
+    assert stale_dir.name not in _listing(tmp_path)

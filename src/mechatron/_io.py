@@ -9,6 +9,10 @@ temporary file behind.
 
 A folder is built the same way by :func:`atomic_dir`: in a temporary sibling, renamed to
 its name when complete.
+
+Only a killed process (``kill -9``, a power cut) can leave a temporary file or folder
+behind (``.mechatron-tmp-<name>-...``); the next write of the same name removes those older
+than :data:`STALE_AFTER`.
 """
 
 from __future__ import annotations
@@ -29,6 +33,37 @@ log = logging.getLogger(__name__)
 
 #: Temporary files and folders start with this, so that they are recognisable.
 TEMP_PREFIX = ".mechatron-tmp-"
+
+#: Leftovers of a killed writer older than this (s) are removed by the next write of the
+#: same name; younger ones may belong to a writer still at work.
+STALE_AFTER = 24 * 3600.0
+
+
+def _remove_stale(folder: Path, prefix: str) -> None:
+    """Remove temporary files and folders ``prefix*`` in ``folder`` older than
+    :data:`STALE_AFTER` (left by a killed process)."""
+    import time
+    now = time.time()
+    try:
+        candidates = list(folder.glob(_glob_escape(prefix) + "*"))
+    except OSError:
+        return
+    for p in candidates:
+        try:
+            if now - p.lstat().st_mtime < STALE_AFTER:
+                continue
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p, ignore_errors=True)
+            else:
+                p.unlink()
+            log.debug("removed stale temporary %s", p)
+        except OSError:
+            continue
+
+
+def _glob_escape(text: str) -> str:
+    """``text`` with the glob characters ``*?[`` taken literally."""
+    return "".join(f"[{c}]" if c in "*?[" else c for c in text)
 
 
 @functools.cache
@@ -83,6 +118,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             os.fsync(fh.fileno())
         os.replace(tmp, path)
         log.info("wrote %s", path)
+        _remove_stale(folder, f"{TEMP_PREFIX}{path.stem}-")
     finally:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
@@ -149,6 +185,7 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
         else:
             os.replace(tmp, path)
         log.info("wrote folder %s", path)
+        _remove_stale(parent, f"{TEMP_PREFIX}{path.name}-")
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)

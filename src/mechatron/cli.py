@@ -16,7 +16,10 @@ Subcommands
     The showcase: :data:`DEMO_STEPS`, run in order.
 
 Every subcommand takes ``--help``; ``--json`` prints one JSON object on stdout instead of
-the human summary.
+the human summary. A model (``NAME``) is a database name, a user's file
+``path/to/model.py[:ClassName]`` or ``package.module:ClassName`` (see
+:mod:`mechatron.models.user`). The library's log (the ``mechatron`` logger) goes to
+stderr: warnings always, what is done with ``-v``, details with ``-vv``.
 
 Exit codes and errors
 ---------------------
