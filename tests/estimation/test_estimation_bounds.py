@@ -65,3 +65,21 @@ settling_time = 0.025
     assert "AT UPPER BOUND 0.01" in row
     assert "Kp at its upper bound 0.01" in err           # the logged warning
     assert code in (0, 1)
+
+
+def test_free_parameters_and_design_variables_check_their_bounds():
+    from mechatron.errors import ParameterError
+    from mechatron.estimation import FreeParameter
+    from mechatron.estimation.optimize import DesignVariable
+    for cls, kind in ((FreeParameter, "free parameter"), (DesignVariable, "design variable")):
+        with pytest.raises(ParameterError, match=rf"{kind} 'R': the lower bound min = 10 is "
+                                                 r"not below the upper bound max = 5\."):
+            cls("R", 7.0, 10.0, 5.0)
+        with pytest.raises(ParameterError, match=rf"{kind} 'R': starting value 20 is outside "
+                                                 r"\[0, 10\]"):
+            cls("R", 20.0, 0.0, 10.0)
+        with pytest.raises(ParameterError, match="'R': scale must be > 0, got 0"):
+            cls("R", 1.0, scale=0.0)
+        with pytest.raises(ParameterError, match="'R': min must be a number, got nan"):
+            cls("R", 1.0, math.nan)
+        assert cls("R", 7.0, 0.0).max == math.inf

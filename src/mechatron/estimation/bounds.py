@@ -11,7 +11,9 @@ import math
 
 import numpy as np
 
-__all__ = ["at_bounds", "describe_at_bounds"]
+from mechatron.errors import ParameterError
+
+__all__ = ["at_bounds", "describe_at_bounds", "check_bounds"]
 
 #: A value within this fraction of its scale from a bound counts as on it.
 RTOL = 1e-6
@@ -44,3 +46,29 @@ def describe_at_bounds(hits: dict, what: str = "value") -> str:
              f"{h['bound']:g}" for name, h in hits.items()]
     return (f"{'; '.join(parts)}: the bound decided the {what}, not an interior optimum; "
             "widen the bound if the physics allows it, or fix the parameter at it.")
+
+
+def check_bounds(var, kind: str) -> None:
+    """Check the bounds of a free parameter or design variable (``name``, ``initial``,
+    ``min``, ``max``, ``scale``): numbers, ``min < max``, ``initial`` between them,
+    ``scale > 0``; every problem in one :class:`ParameterError` that names ``kind``
+    (``"free parameter"``, ``"design variable"``) and the name."""
+    where = f"{kind} '{var.name}'"
+    problems = []
+    for key in ("initial", "min", "max", "scale"):
+        v = getattr(var, key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float, np.number))
+                              or math.isnan(v)):
+            problems.append(f"{where}: {key} must be a number, got {v!r}.")
+    if problems:
+        raise ParameterError(" ".join(problems), problems=problems, path=var.name)
+    if not var.min < var.max:
+        problems.append(f"{where}: the lower bound min = {var.min:g} is not below the "
+                        f"upper bound max = {var.max:g}.")
+    elif var.initial is not None and not var.min <= var.initial <= var.max:
+        problems.append(f"{where}: starting value {var.initial:g} is outside "
+                        f"[{var.min:g}, {var.max:g}].")
+    if var.scale is not None and not var.scale > 0:
+        problems.append(f"{where}: scale must be > 0, got {var.scale:g}.")
+    if problems:
+        raise ParameterError(" ".join(problems), problems=problems, path=var.name)

@@ -41,7 +41,7 @@ import numpy as np
 import mechatron as mt
 from mechatron._io import save_figure
 from mechatron.errors import ParameterError
-from mechatron.estimation.bounds import at_bounds, describe_at_bounds
+from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.discretize import Trajectory, choose_substeps, fastest_time_constant
 
 log = logging.getLogger(__name__)
@@ -59,6 +59,9 @@ class DesignVariable:
     min: float = -math.inf
     max: float = math.inf
     scale: float | None = None
+
+    def __post_init__(self):
+        check_bounds(self, "design variable")
 
 
 @dataclass

@@ -51,7 +51,7 @@ import mechatron as mt
 from mechatron._io import save_figure
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import DataError, ParameterError
-from mechatron.estimation.bounds import at_bounds, describe_at_bounds
+from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.data import unit_factor
 from mechatron.estimation.native import compiler
 from mechatron.estimation.discretize import (Trajectory, check_model, choose_substeps,
@@ -74,6 +74,9 @@ class FreeParameter:
     min: float = -math.inf
     max: float = math.inf
     scale: float | None = None
+
+    def __post_init__(self):
+        check_bounds(self, "free parameter")
 
 
 def _as_free(spec) -> FreeParameter:
