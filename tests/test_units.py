@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from mechatron.errors import UnitError
-from mechatron.units import to_si
+from mechatron.units import to_base, to_si
 
 
 def test_quantities_convert_to_si():
@@ -26,3 +26,12 @@ def test_a_comma_in_a_number_is_rejected_not_read_as_digits(text, decimal, group
     assert msg.startswith(f"motor.R: {text!r} has a comma in a number")
     assert repr(decimal) in msg and repr(grouped) in msg
     assert info.value.path == "motor.R"
+
+
+def test_to_base_compares_quantities_before_their_target_unit_is_known():
+    assert to_base("340 uH", "f.L") == pytest.approx(340e-6)
+    assert to_base("2 mH", "f.L") > to_base("1500 uH", "f.L")
+    with pytest.raises(UnitError, match="f.L: cannot read 'lots' as a quantity"):
+        to_base("lots", "f.L")
+    with pytest.raises(UnitError, match="comma"):
+        to_base("1,5 mH", "f.L")

@@ -16,7 +16,7 @@ import pint
 
 from mechatron.errors import UnitError
 
-__all__ = ["ureg", "to_si", "check_unit", "check_number_text", "dimensionality"]
+__all__ = ["ureg", "to_si", "to_base", "check_unit", "check_number_text", "dimensionality"]
 
 ureg = pint.UnitRegistry()
 ureg.define("@alias ohm = Ohm")  # the capitalised spelling engineers write
@@ -94,6 +94,19 @@ def to_si(value, unit: str, where: str) -> float:
         return float(value.to(target).magnitude)
     raise UnitError(f"{where}: expected a number or a quantity such as '1 {unit}', "
                     f"got {type(value).__name__} {value!r}.", path=where)
+
+
+def to_base(text: str, where: str) -> float:
+    """The magnitude of a quantity string in SI base units (``"340 uH"`` -> 3.4e-4), for
+    comparing values whose target unit is not known yet (bounds in a problem file).
+
+    Raises :class:`UnitError` for a comma in a number or text pint cannot read."""
+    check_number_text(text, where)
+    try:
+        return float(_Q(text).to_base_units().magnitude)
+    except Exception:
+        raise UnitError(f"{where}: cannot read {text!r} as a quantity; write a number and "
+                        "a unit, e.g. '340 uH'.", path=where) from None
 
 
 def _describe(dim) -> str:

@@ -16,7 +16,7 @@ from pathlib import Path
 import mechatron as mt
 from mechatron.errors import DataError, ModelError, ParameterError, UnitError
 from mechatron.estimation.data import Experiment, load_experiment
-from mechatron.units import _Q, check_number_text, to_si
+from mechatron.units import to_base, to_si
 
 __all__ = ["load_config", "build_model", "build_estimation", "build_sensitivity",
            "build_response", "generate_bench_data"]
@@ -101,14 +101,9 @@ class _Checks:
                 self.add(where, f"expected a number, got the text {value!r}")
                 return None
             try:
-                check_number_text(value, where)
-                x = float(_Q(value).to_base_units().magnitude)
+                x = to_base(value, where)
             except UnitError as exc:
                 self.add(where, str(exc).split(": ", 1)[-1].rstrip("."))
-                return None
-            except Exception:
-                self.add(where, f"cannot read {value!r} as a quantity; write a number and "
-                                "a unit, e.g. '340 uH'")
                 return None
         else:
             x = float(value)
