@@ -44,7 +44,6 @@ def add_rtcheck_command(sub) -> None:
 def cmd_rtcheck(args) -> int:
     import math
 
-    import mechatron as mt
     from mechatron.cli import CommandError, _parse_sets, emit, emit_json, table
     from mechatron.models.user import entry_for
     from mechatron.realtime.rtcheck import rtcheck

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import mechatron as mt
 from mechatron.cli import MODEL_HELP, CommandError, add_json, emit, emit_json
 from mechatron.models.user import entry_for
 
