@@ -77,10 +77,17 @@ def _summary(results: dict) -> dict:
                          "compile_goals": data["compile_goals"]}
     pw = results.get("pwm")
     if pw and "error" not in pw:
-        out["pwm"] = {"us_per_event": [r["us_per_event"] for r in pw["rows"]],
-                      "events": [r["events"] for r in pw["rows"]],
-                      "us_per_event_growth": pw["us_per_event_growth"],
-                      "rel_err_mean_current": pw["rows"][-1]["rel_err_mean_current"]}
+        solvers = ("auto", "rodas4")
+        rows = {s: [r for r in pw["rows"] if (r["solver"] == "rodas4") == (s == "rodas4")]
+                for s in solvers}
+        out["pwm"] = {**{f"us_per_event_{s}": [r["us_per_event"] for r in rows[s]]
+                         for s in solvers},
+                      "events": [r["events"] for r in rows["auto"]],
+                      **{f"us_per_event_growth_{s}": pw[f"us_per_event_growth_{s}"]
+                         for s in solvers},
+                      "ratio_auto_over_rodas4": pw["ratio_auto_over_rodas4"],
+                      "rel_err_mean_current": max(r["rel_err_mean_current"]
+                                                  for r in pw["rows"])}
     mb = results.get("multibody")
     if mb and "error" not in mb:
         out["multibody"] = {

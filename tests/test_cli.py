@@ -258,3 +258,103 @@ def test_demo_writes_plots_and_logs(capsys, tmp_path):
     assert all(p.read_bytes()[:4] == b"\x89PNG" for p in pngs)
     log = mt.SimResult.load(out_dir / "dc_motor_acausal.csv")
     assert log.final("inertia.w") == pytest.approx(W_FINAL, rel=1e-8)
+
+
+# ------------------------------------------------------------------ silently wrong values
+@pytest.mark.parametrize("value", ["R=7,1 ohm", "R=7,1"])
+def test_set_with_a_decimal_comma_is_an_error_not_71_ohm(capsys, value):
+    code, out, err = run(capsys, "simulate", "dc_motor", "--set", value)
+    assert code == 2 and out == ""
+    assert err.startswith("error: --set R: ") and "comma" in err and "'7.1" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_input_with_a_decimal_comma_is_an_error(capsys):
+    code, out, err = run(capsys, "simulate", "dc_motor", "--input", "u=3,5 V")
+    assert code == 2 and err.startswith("error: --input u: ") and "comma" in err
+
+
+# ---------------------------------------------------------------- crashes made clear errors
+def _one_line_exit_2(code, out, err):
+    assert code == 2 and out == ""
+    assert err.startswith("error: ") and err.count("\n") == 1 and "unexpected" not in err
+
+
+@pytest.mark.parametrize("text, what", [("", "an empty file"),
+                                        ("t,u\n", "a header and no rows")])
+def test_empty_input_csv_is_a_clear_error(capsys, tmp_path, text, what):
+    path = tmp_path / "u.csv"
+    path.write_text(text)
+    code, out, err = run(capsys, "simulate", "dc_motor", "--input", f"u={path}")
+    _one_line_exit_2(code, out, err)
+    assert f"--input u={path}: {what}" in err
+
+
+def test_a_tiny_fixed_step_is_refused_before_memory_runs_out(capsys):
+    code, out, err = run(capsys, "simulate", "dc_motor", "--solver", "rk4", "--dt", "1e-12")
+    _one_line_exit_2(code, out, err)
+    # 0.5 s (the experiment) / 1e-12 s = 5e11 steps
+    assert "--dt 1e-12 s with t_stop 0.5 s: 5e+11 fixed steps" in err
+    assert "at least 5e-08 s" in err
+    code, out, err = run(capsys, "simulate", "dc_motor", "--solver", "rk4", "--dt", "1e-7",
+                         "--t-stop", "2")
+    _one_line_exit_2(code, out, err)
+    assert "2e+07 fixed steps" in err
+
+
+def test_simulate_out_interrupted_keeps_the_previous_log(capsys, tmp_path, monkeypatch):
+    path = tmp_path / "run.csv"
+    code, _, err = run(capsys, "simulate", "dc_motor", "--out", str(path))
+    assert code == 0, err
+    before = path.read_bytes()
+
+    def interrupted(fh, *args, **kwargs):
+        fh.write("0,1,2\n")                     # half a table, then Ctrl-C
+        raise KeyboardInterrupt
+    monkeypatch.setattr(np, "savetxt", interrupted)
+    code, _, err = run(capsys, "simulate", "dc_motor", "--set", "V=12", "--out", str(path))
+    assert code == 130 and err == "error: interrupted.\n"
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]
+
+
+# ---------------------------------------------------------------------------------- logging
+def test_verbose_shows_what_is_written_and_warnings_show_without_it(capsys, tmp_path,
+                                                                     monkeypatch):
+    import logging
+    from mechatron import cli
+    path = tmp_path / "run.csv"
+    for argv in (["-v", "simulate", "dc_motor", "--out", str(path)],
+                 ["simulate", "dc_motor", "--out", str(path), "--verbose"]):
+        code, out, err = run(capsys, *argv)
+        assert code == 0 and f"wrote {path}" in err.splitlines()
+    code, out, err = run(capsys, "simulate", "dc_motor", "--out", str(path))
+    assert code == 0 and err == ""          # quiet by default
+
+    def models(args):                       # a command whose library code logs
+        logger = logging.getLogger("mechatron.somewhere")
+        logger.warning("something to know")
+        logger.info("what it does")
+        logger.debug("details")
+        return 0
+    monkeypatch.setattr(cli, "cmd_models", models)
+    assert run(capsys, "models")[2] == "warning: something to know\n"
+    assert run(capsys, "-v", "models")[2] == "warning: something to know\nwhat it does\n"
+    assert run(capsys, "models", "-vv")[2] == ("warning: something to know\nwhat it does\n"
+                                               "debug: details\n")
+    # the handler is removed after each command
+    assert not any(type(h).__name__ == "_StderrHandler"
+                   for h in logging.getLogger("mechatron").handlers)
+
+
+def test_a_full_disk_is_a_one_line_error_naming_the_file(capsys, tmp_path, monkeypatch):
+    import errno
+    path = tmp_path / "run.csv"
+
+    def full(fh, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(np, "savetxt", full)
+    code, out, err = run(capsys, "simulate", "dc_motor", "--out", str(path))
+    assert code == 2 and out == ""
+    assert err == f"error: [Errno 28] No space left on device: '{path}'\n"
+    assert list(tmp_path.iterdir()) == []

@@ -5,7 +5,13 @@ mechatronic systems.
 >>> res = mt.simulate(mt.models.get("dc_motor").build(), 0.5)
 """
 
-from mechatron.compiler import CompiledModel, compile_model
+import logging as _logging
+
+# The library logs to the "mechatron" logger and never prints; an application chooses
+# what to show (the command line shows warnings, and more with -v).
+_logging.getLogger("mechatron").addHandler(_logging.NullHandler())
+
+from mechatron.compiler import CompiledModel, compile_model  # noqa: E402
 from mechatron.core import (Across, Component, Connector, Domain, Input, Output, Parameter,
                             Start, System, Through, Variable, connect, der, if_else)
 from mechatron.core.events import Clock, sample, when

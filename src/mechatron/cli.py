@@ -1,4 +1,4 @@
-"""The ``mechatron`` command (DESIGN.md §3).
+"""The ``mechatron`` command (also ``python -m mechatron``).
 
 Subcommands
 -----------
@@ -16,13 +16,16 @@ Subcommands
     The showcase: :data:`DEMO_STEPS`, run in order.
 
 Every subcommand takes ``--help``; ``--json`` prints one JSON object on stdout instead of
-the human summary.
+the human summary. A model (``NAME``) is a database name, a user's file
+``path/to/model.py[:ClassName]`` or ``package.module:ClassName`` (see
+:mod:`mechatron.models.user`). The library's log (the ``mechatron`` logger) goes to
+stderr: warnings always, what is done with ``-v``, details with ``-vv``.
 
 Exit codes and errors
 ---------------------
 0 on success; 2 for a usage error (argparse) or a problem with the user's input (any
-:class:`~mechatron.errors.MechatronError`, :class:`ValueError`, :class:`TypeError`, a
-missing file or directory), reported as one line ``error: <message>`` on stderr; 1 for an
+:class:`~mechatron.errors.MechatronError`, :class:`ValueError`, :class:`TypeError`, an
+:class:`OSError` such as a missing file or folder or a full disk), reported as one line ``error: <message>`` on stderr; 1 for an
 unexpected error (a bug), also one line, or for a demo whose checks failed. Set
 ``MECHATRON_DEBUG=1`` to get the traceback as well.
 
@@ -38,6 +41,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import json
+import logging
 import math
 import os
 import sys
@@ -51,14 +55,17 @@ from typing import Any
 import numpy as np
 
 import mechatron as mt
+from mechatron._io import save_figure
 from mechatron.errors import MechatronError
 from mechatron.models.compare import COMPARE_POINTS, compare_variants
+from mechatron.models.user import entry_for
 from mechatron.models.compare import relative as _relative
 from mechatron.models.compare import max_deviation as _max_deviation
 from mechatron.results import SUFFIXES as LOG_SUFFIXES
 from mechatron.results import SimResult
 from mechatron.solvers import METHODS as FIXED_STEP_METHODS
 from mechatron.solvers import SOLVERS
+from mechatron.units import check_number_text
 
 __all__ = ["main", "build_parser", "EXTENSIONS", "DEMO_STEPS", "DemoStep", "DemoRun", "CommandError",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE"]
@@ -69,12 +76,17 @@ EXIT_USAGE = 2       # bad arguments or bad input (argparse's own code for usage
 
 
 #: Exceptions that mean "the input is wrong", not "Mechatron is wrong".
-USER_ERRORS = (MechatronError, ValueError, TypeError, FileNotFoundError, FileExistsError,
-               NotADirectoryError, IsADirectoryError, PermissionError)
+#: ``OSError`` covers the environment as well: a full disk, a folder that cannot be written.
+USER_ERRORS = (MechatronError, ValueError, TypeError, OSError)
 
 
 class CommandError(MechatronError, ValueError):
     """A command-line argument that cannot be used as given."""
+
+
+#: Help of a NAME argument: what the commands accept as a model.
+MODEL_HELP = ("model: a database name (see `mechatron models`), a Python file "
+              "path/to/model.py[:ClassName] or package.module:ClassName")
 
 
 # ---------------------------------------------------------------------------- formatting
@@ -192,6 +204,7 @@ def _parse_inputs(items: Sequence[str] | None) -> dict[str, object]:
         if value.lower().endswith(".csv"):
             inputs[key] = _input_table(key, Path(value))
         else:
+            check_number_text(value, f"--input {key}")
             try:
                 inputs[key] = float(value)
             except ValueError:
@@ -207,6 +220,11 @@ def _input_table(key: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if not path.is_file():
         raise CommandError(f"--input {key}={path}: no such file. Give a CSV file with a "
                            f"header row 't,{key}'.")
+    lines = [line for line in path.read_text(errors="replace").splitlines() if line.strip()]
+    if len(lines) < 2:
+        got = "an empty file" if not lines else "a header and no rows"
+        raise CommandError(f"--input {key}={path}: {got}; expected a header row 't,{key}' "
+                           "and at least one row of numbers.")
     try:
         data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
     except ValueError as exc:
@@ -224,6 +242,7 @@ def _input_table(key: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _number_or_quantity(key: str, value: str) -> float | str:
+    check_number_text(value, f"--set {key}")
     try:
         number = float(value)
     except ValueError:
@@ -231,6 +250,25 @@ def _number_or_quantity(key: str, value: str) -> float | str:
     if not math.isfinite(number):
         raise CommandError(f"--set {key}: expected a finite value, got {value!r}.")
     return number
+
+
+#: The most steps a fixed-step run of the command line may take: every step is kept in
+#: memory (states, and the logged variables computed from them).
+MAX_FIXED_STEPS = 10_000_000
+
+
+def check_step_count(dt: float, t_stop: float, limit: int = MAX_FIXED_STEPS) -> int:
+    """The number of fixed steps of ``t_stop / dt``; a :class:`CommandError` naming both
+    when it is above ``limit`` (the run would exhaust the memory, not finish)."""
+    if not (isinstance(t_stop, (int, float)) and math.isfinite(t_stop) and t_stop > 0):
+        return 0                       # simulate reports a bad t_stop itself
+    steps = t_stop / dt
+    if steps > limit:
+        raise CommandError(f"--dt {dt:g} s with t_stop {t_stop:g} s: {steps:.3g} fixed "
+                           f"steps, more than the {limit:,} a run may take (each step is "
+                           f"kept in memory). Give a larger --dt (at least "
+                           f"{t_stop / limit:.3g} s) or a shorter --t-stop.")
+    return int(math.ceil(steps))
 
 
 def _output_path(path: str | None, option: str, suffixes: Sequence[str]) -> Path | None:
@@ -295,6 +333,8 @@ class _Settings:
             raise CommandError(f"--dt: the step size must be a number > 0, got {dt!r}.")
         t_stop = getattr(args, "t_stop", None)
         t_stop = exp.t_stop if t_stop is None else t_stop
+        if fixed:
+            check_step_count(dt, t_stop)
         rtol = getattr(args, "rtol", None)
         atol = getattr(args, "atol", None)
         for option, value in (("--rtol", rtol), ("--atol", atol)):
@@ -384,7 +424,7 @@ def _labels(entry) -> list[str]:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     if args.json:
         _emit_json(_entry_dict(entry))
         return EXIT_OK
@@ -418,7 +458,7 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- simulate
 def cmd_simulate(args: argparse.Namespace) -> int:
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     params = _parse_sets(args.set, entry)
     variant = args.variant or entry.default_variant
     settings = _Settings.resolve(args, entry)
@@ -427,9 +467,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     inputs = _parse_inputs(args.input)
     model = entry.build(variant, **params)
+    outputs = dict(entry.output_paths(variant))
+    if not outputs:                 # a user's model that declares no variables: its states
+        model = mt.compile_model(model)
+        outputs = {name: name for name in model.state_names}
     res = mt.simulate(model, settings.t_stop, solver=settings.solver, dt=settings.dt,
                       rtol=settings.rtol, atol=settings.atol, inputs=inputs or None)
-    outputs = dict(entry.output_paths(variant))
     final = {label: res.final(path) for label, path in outputs.items()}
     units = {label: entry.output_units.get(label, res.units.get(path, ""))
              for label, path in outputs.items()}
@@ -478,7 +521,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------------- compare
 def cmd_compare(args: argparse.Namespace) -> int:
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     params = _parse_sets(args.set, entry)
     settings = _Settings.resolve(args, entry)
     out = _output_path(args.out, "--out", _figure_suffixes()) if args.out else None
@@ -489,7 +532,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
     files: dict[str, str] = {}
     if out is not None:
-        cmp.figure().savefig(out, dpi=100)
+        save_figure(cmp.figure(), out, dpi=100)
         files["out"] = str(out)
 
     if args.json:
@@ -797,7 +840,7 @@ def _demo_startup_plot(d: DemoRun) -> Path:
     axis.grid(True, alpha=0.3)
     fig.suptitle(f"{d.name}: start-up, acausal vs ODE vs fixed-step RK4")
     path = d.out / f"{d.name}_startup.png"
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     return path
 
 
@@ -974,6 +1017,12 @@ def _add_set(p: argparse.ArgumentParser) -> None:
                         "number is SI, or give a unit: --set \"L=340 uH\". Repeatable.")
 
 
+def _add_verbose(p: argparse.ArgumentParser, dest: str) -> None:
+    p.add_argument("-v", "--verbose", action="count", default=0, dest=dest,
+                   help="show what Mechatron does on stderr (-v: progress and files, "
+                        "-vv: details); warnings are always shown")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``mechatron`` command."""
     parser = argparse.ArgumentParser(
@@ -982,6 +1031,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Errors are reported as one line on stderr (exit code 2 for bad input); "
                "set MECHATRON_DEBUG=1 for tracebacks.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {mt.__version__}")
+    _add_verbose(parser, "verbose")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     p = sub.add_parser("models", help="list the model database",
@@ -995,7 +1045,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Describe one model: parameters with units, defaults "
                                    "and sources; variants; outputs; experiment; expected "
                                    "values.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     _add_json(p)
     p.set_defaults(func=cmd_show)
 
@@ -1003,7 +1053,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Build, compile and simulate one variant of a model; "
                                    "print the final value of each output and the solver "
                                    "profile. Defaults come from the model's experiment.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--variant", metavar="V", help="variant to build (default: the first)")
     p.add_argument("--t-stop", type=float, metavar="T", help="end time in s")
     _add_set(p)
@@ -1031,7 +1081,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "experiment's solver and tolerances, and print the "
                                    "largest deviation of each output from the first "
                                    "variant.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--t-stop", type=float, metavar="T", help="end time in s")
     _add_set(p)
     p.add_argument("--out", metavar="FILE.png", help="write an overlay plot")
@@ -1047,6 +1097,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="directory for plots and logs (default: %(default)s)")
     p.set_defaults(func=cmd_demo)
     _add_extensions(sub)
+    for command in sub.choices.values():       # `mechatron simulate ... -v` works too
+        _add_verbose(command, "verbose_command")
     return parser
 
 
@@ -1068,6 +1120,37 @@ def _debug() -> bool:
     return os.environ.get("MECHATRON_DEBUG", "").strip() not in ("", "0")
 
 
+class _StderrHandler(logging.Handler):
+    """Records of the ``mechatron`` logger as lines on the current ``sys.stderr`` (looked
+    up at each record, so that redirections apply): ``warning: ...``, ``debug: ...``;
+    info records as they are."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = record.getMessage()
+            if record.levelno != logging.INFO:
+                text = f"{record.levelname.lower()}: {text}"
+            print(text, file=sys.stderr, flush=True)
+        except Exception:  # logging must never break the command
+            self.handleError(record)
+
+
+def _logging(verbosity: int) -> Callable[[], None]:
+    """Show the ``mechatron`` logger's records on stderr: warnings always, info with
+    ``-v``, debug with ``-vv``. Returns the function that undoes it."""
+    logger = logging.getLogger("mechatron")
+    level = (logging.WARNING, logging.INFO)[verbosity] if verbosity < 2 else logging.DEBUG
+    handler = _StderrHandler(level)
+    before = logger.level
+    logger.setLevel(level)
+    logger.addHandler(handler)
+
+    def undo() -> None:
+        logger.removeHandler(handler)
+        logger.setLevel(before)
+    return undo
+
+
 def _fail(message: str, code: int) -> int:
     if _debug():
         traceback.print_exc()
@@ -1085,6 +1168,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a usage error (already printed)
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    undo_logging = _logging(getattr(args, "verbose", 0)
+                            + getattr(args, "verbose_command", 0))
     try:
         return int(args.func(args) or EXIT_OK)
     except KeyboardInterrupt:
@@ -1100,6 +1185,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _fail(f"unexpected {type(exc).__name__}: {exc} (a bug in Mechatron; "
                      f"run with MECHATRON_DEBUG=1 for the traceback and report it)",
                      EXIT_FAILURE)
+    finally:
+        undo_logging()
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import difflib
+import io
 import json
 import os
 from collections.abc import Iterable, Mapping, Sequence
@@ -36,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mechatron._io import atomic_path, save_figure
 from mechatron.errors import DataError, UnknownVariableError
 
 if TYPE_CHECKING:  # imported lazily at run time: they are only needed to export or plot
@@ -430,7 +432,7 @@ class SimResult:
         table = np.empty((self._t.size, len(self._names) + 1))
         table[:, 0] = self._t
         table[:, 1:] = self._values.T
-        with open(path, "w", newline="", encoding="utf-8") as fh:
+        with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
             csv.writer(fh, lineterminator="\n").writerow(["t", *self._names])
             np.savetxt(fh, table, fmt="%.17g", delimiter=",")
 
@@ -443,11 +445,15 @@ class SimResult:
                 raise DataError(f"{path}: the first column must be 't' (time in s), got "
                                 f"{got}.", path=str(path))
             names = [h.strip() for h in header[1:]]
-            try:
-                table = np.loadtxt(fh, dtype=float, delimiter=",", ndmin=2)
-            except ValueError as exc:
-                raise DataError(f"{path}: not a table of numbers under the header: {exc}",
-                                path=str(path)) from exc
+            rows = fh.read()
+        if not rows.strip():
+            raise DataError(f"{path}: no data under the header; a simlog has at least one "
+                            "row of numbers.", path=str(path))
+        try:
+            table = np.loadtxt(io.StringIO(rows), dtype=float, delimiter=",", ndmin=2)
+        except ValueError as exc:
+            raise DataError(f"{path}: not a table of numbers under the header: {exc}",
+                            path=str(path)) from exc
         if table.shape[1] != len(header):
             raise DataError(f"{path}: {len(header)} columns in the header but "
                             f"{table.shape[1]} in the data.", path=str(path))
@@ -468,7 +474,8 @@ class SimResult:
         info = {"format": _FORMAT_VERSION, "model_name": self.model_name,
                 "stats": None if self.stats is None else self.stats.as_dict()}
         schema = pa.schema(fields, metadata={_METADATA_KEY: json.dumps(info)})
-        pq.write_table(pa.Table.from_arrays(columns, schema=schema), path)
+        with atomic_path(path) as tmp:
+            pq.write_table(pa.Table.from_arrays(columns, schema=schema), tmp)
 
     @classmethod
     def _load_parquet(cls, path: Path) -> SimResult:
@@ -569,7 +576,7 @@ class SimResult:
         if self.model_name:
             fig.suptitle(self.model_name)
         if path is not None:
-            fig.savefig(path, dpi=100)
+            save_figure(fig, path, dpi=100)
         return fig
 
     def animate(self, path: str | os.PathLike[str], **options: Any) -> Path:

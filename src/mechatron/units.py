@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import functools
 import numbers
+import re
 
 import pint
 
 from mechatron.errors import UnitError
 
-__all__ = ["ureg", "to_si", "check_unit", "dimensionality"]
+__all__ = ["ureg", "to_si", "to_base", "check_unit", "check_number_text", "dimensionality"]
 
 ureg = pint.UnitRegistry()
 ureg.define("@alias ohm = Ohm")  # the capitalised spelling engineers write
@@ -35,6 +36,22 @@ def check_unit(unit: str, where: str = "") -> str:
         raise UnitError(f"{where}: unknown unit {unit!r} ({exc}). "
                         "Use pint's notation, e.g. 'N*m/(rad/s)'.", path=where) from None
     return unit
+
+
+_DIGIT_COMMA_DIGIT = re.compile(r"\d,\d")
+
+
+def check_number_text(text: str, where: str) -> None:
+    """Reject a comma between digits (``"7,1 ohm"``): pint would read it as 71 ohm.
+
+    A decimal comma (German, French...) or a thousands separator is ambiguous; Mechatron
+    accepts neither and asks for a decimal point."""
+    if _DIGIT_COMMA_DIGIT.search(text):
+        decimal = re.sub(r"(\d),(\d)", r"\1.\2", text)
+        grouped = re.sub(r"(\d),(\d)", r"\1\2", text)
+        raise UnitError(f"{where}: {text!r} has a comma in a number (a decimal comma or a "
+                        f"thousands separator?); write a decimal point and no separator: "
+                        f"{decimal!r} or {grouped!r}.", path=where)
 
 
 def dimensionality(unit: str):
@@ -60,6 +77,7 @@ def to_si(value, unit: str, where: str) -> float:
     if isinstance(value, numbers.Real):
         return float(value)
     if isinstance(value, str):
+        check_number_text(value, where)
         try:
             value = _Q(value)
         except Exception:
@@ -76,6 +94,19 @@ def to_si(value, unit: str, where: str) -> float:
         return float(value.to(target).magnitude)
     raise UnitError(f"{where}: expected a number or a quantity such as '1 {unit}', "
                     f"got {type(value).__name__} {value!r}.", path=where)
+
+
+def to_base(text: str, where: str) -> float:
+    """The magnitude of a quantity string in SI base units (``"340 uH"`` -> 3.4e-4), for
+    comparing values whose target unit is not known yet (bounds in a problem file).
+
+    Raises :class:`UnitError` for a comma in a number or text pint cannot read."""
+    check_number_text(text, where)
+    try:
+        return float(_Q(text).to_base_units().magnitude)
+    except Exception:
+        raise UnitError(f"{where}: cannot read {text!r} as a quantity; write a number and "
+                        "a unit, e.g. '340 uH'.", path=where) from None
 
 
 def _describe(dim) -> str:

@@ -51,3 +51,23 @@ def test_demo_run_generates_compiles_and_runs_the_dc_motor(tmp_path):
     assert d["ns_per_step"] > 0 and d["steps"] == 1000
     assert d["fmu_check"]["validation_problems"] == []
     assert d["fmu_check"]["max_rel_difference_to_desktop"] <= 1e-6
+
+
+def test_codegen_arm_with_a_relative_out(run, tmp_path, monkeypatch):
+    from mechatron.codegen.c.build import have_cross_compiler
+    if not have_cross_compiler():
+        pytest.skip("arm-none-eabi-gcc not installed")
+    monkeypatch.chdir(tmp_path)
+    proc = run("codegen", "dc_motor", "--dt", "1e-4", "--out", "gen/motor", "--arm",
+               "--json")
+    assert proc.returncode == 0, proc.stderr
+    arm = json.loads(proc.stdout)["arm"]
+    assert (tmp_path / "gen" / "motor" / "dc_motor_arm.elf").is_file()
+    assert arm["flash_bytes"] == arm["text_bytes"] + arm["data_bytes"] > 0
+    assert arm["ram_bytes"] == arm["data_bytes"] + arm["bss_bytes"]
+
+
+def test_codegen_refuses_a_step_count_that_cannot_fit(run, tmp_path):
+    proc = run("codegen", "dc_motor", "--dt", "1e-12", "--out", str(tmp_path / "c"))
+    assert proc.returncode == 2 and "fixed steps" in proc.stderr
+    assert not (tmp_path / "c").exists()

@@ -79,3 +79,31 @@ def test_bad_problem_files_are_one_line_errors(capsys, tmp_path):
                    "[[experiments]]\nfile = 'x.csv'\n")
     code, out, err = run(capsys, "estimate", str(bad))
     assert code == 2 and "'Q' is not a parameter" in err
+
+
+def test_empty_data_file_and_missing_dask_are_clear_errors(capsys, example, tmp_path):
+    import importlib.util
+    cfg = example("dc_motor_estimate.toml")
+    data = tmp_path / "dc_motor_data"
+    data.mkdir()
+    (data / "multi_step.csv").write_text("")
+    (data / "locked_rotor.csv").write_text("")
+    code, out, err = run(capsys, "estimate", str(cfg), "--quiet")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "multi_step.csv: the file is empty" in err
+    if importlib.util.find_spec("dask") is not None:
+        pytest.skip("dask is installed")
+    cfg = example("dc_motor_sensitivity.toml")
+    code, out, err = run(capsys, "sensitivity", str(cfg), "--dask", "tcp://127.0.0.1:8786",
+                         "--quiet")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err.startswith("error: --dask: evaluating on a Dask cluster needs the packages "
+                          "dask and distributed")
+
+
+def test_bad_sample_and_worker_counts(capsys, example):
+    cfg = example("dc_motor_sensitivity.toml")
+    for argv, text in ((["--samples", "0"], "--samples: at least 2, got 0"),
+                       (["--workers", "0"], "--workers: at least 1, got 0")):
+        code, out, err = run(capsys, "sensitivity", str(cfg), *argv, "--quiet")
+        assert code == 2 and err == f"error: {text}.\n"

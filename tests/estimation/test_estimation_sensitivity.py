@@ -9,6 +9,7 @@ from mechatron.estimation import EstimationProblem, FreeParameter
 from mechatron.estimation.bench import TABLE_6_1, VirtualBench
 from mechatron.estimation.sensitivity import (Distribution, local_sensitivity,
                                               run_sensitivity, sample, sobol_indices,
+                                              sobol_intervals, sobol_warnings,
                                               standardized_regression)
 
 
@@ -42,6 +43,48 @@ def test_sobol_indices_of_an_additive_model_are_analytic():
     np.testing.assert_allclose(ST, [0.8, 0.2, 0.0], atol=0.02)
 
 
+def _additive(X):
+    return 4 * X[..., 0] + 2 * X[..., 1]
+
+
+def test_sobol_intervals_hold_the_analytic_indices_and_shrink_with_samples():
+    """Bootstrap 95% intervals of y = 4 a + 2 b + 0 c: they contain S = (0.8, 0.2, 0),
+    and four times the samples halve them (the estimator's error goes as 1/sqrt(n))."""
+    d = {n: Distribution("uniform", 0, 1) for n in "abc"}
+    exact = np.array([0.8, 0.2, 0.0])
+    widths = []
+    for n in (256, 1024):
+        A, B, AB = sample(d, n, "sobol", seed=4)
+        S1, ST = sobol_indices(_additive(A), _additive(B), _additive(AB))
+        s1_lo, s1_hi, st_lo, st_hi = sobol_intervals(_additive(A), _additive(B),
+                                                     _additive(AB), seed=0)
+        assert np.all(s1_lo - 1e-12 <= exact) and np.all(exact <= s1_hi + 1e-12)
+        assert np.all(st_lo - 1e-12 <= exact) and np.all(exact <= st_hi + 1e-12)
+        widths.append((s1_hi - s1_lo)[:2])
+    ratio = widths[1] / widths[0]
+    assert np.all((0.3 < ratio) & (ratio < 0.75)), ratio
+
+
+def test_sobol_warnings_for_indices_outside_zero_one():
+    names, reqs = ["a", "b", "c"], ["sse_i"]
+    S1 = np.array([[0.5], [-0.004], [-0.2]])
+    ST = np.array([[1.08], [0.01], [0.02]])
+    iv = {"S1_low": np.array([[0.3], [-0.02], [-0.3]]),
+          "S1_high": np.array([[0.7], [0.01], [-0.1]]),
+          "ST_low": np.array([[0.9], [0.0], [0.0]]),
+          "ST_high": np.array([[1.3], [0.03], [0.05]])}
+    warnings = sobol_warnings(names, reqs, S1, ST, iv, 16)
+    # c's first-order index is below 0 beyond its interval; b's is noise inside it;
+    # a's total index exceeds 1
+    assert len(warnings) == 2, warnings
+    assert warnings[0].startswith("c: first-order Sobol index for sse_i is -0.200 (95% "
+                                  "interval [-0.300, -0.100]), which is negative beyond")
+    assert warnings[1].startswith("a: total Sobol index for sse_i is +1.080 (95% interval "
+                                  "[+0.900, +1.300]), which exceeds 1")
+    assert all("more samples (e.g. 64" in w for w in warnings)
+    assert sobol_warnings(names, reqs, None, None, {}, 16) == []
+
+
 def test_standardized_regression_coefficients_of_a_linear_model():
     rng = np.random.default_rng(0)
     X = rng.random((2000, 2))
@@ -69,6 +112,14 @@ def test_ranking_agrees_with_local_finite_differences(motor_problem):
              for n in names}
     res = run_sensitivity(prob, dists, n=64, method="sobol", workers=2, seed=3)
     assert res.evaluations == 64 * (len(names) + 2) and res.failed == 0
+    # an interval per index, and every index outside [0, 1] that the rule flags is
+    # reported as a warning
+    for est, lo, hi in ((res.S1, "S1_low", "S1_high"), (res.ST, "ST_low", "ST_high")):
+        assert res.intervals[lo].shape == est.shape
+        assert np.all(res.intervals[lo] <= res.intervals[hi])
+    assert res.warnings == sobol_warnings(names, res.requirements, res.S1, res.ST,
+                                          res.intervals, 64)
+    assert res.to_dict()["warnings"] == res.warnings
     local = local_sensitivity(prob, names)
     score = {n: max(v.values()) for n, v in local.items()}
     by_local = sorted(names, key=lambda n: -score[n])

@@ -1,5 +1,5 @@
 """Code generation for real time: standalone C99 and FMUs from the fixed-step step
-function that the desktop fixed-step run evaluates (DESIGN.md §2).
+function that the desktop fixed-step run evaluates (docs/realtime.md).
 
 - :func:`generate_c` writes the C files; :func:`build` compiles the host harness;
   :func:`run_harness` runs it and reads its CSV back as a SimResult.

@@ -16,7 +16,9 @@ from pathlib import Path
 import numpy as np
 
 import mechatron as mt
-from mechatron.cli import CommandError, add_json, add_set, emit, emit_json, table
+from mechatron.cli import (MODEL_HELP, CommandError, add_json, add_set, check_step_count,
+                           emit, emit_json, table)
+from mechatron.models.user import entry_for
 from mechatron.solvers import METHODS
 
 __all__ = ["add_commands", "cmd_codegen", "cmd_fmu"]
@@ -48,7 +50,7 @@ def add_codegen(sub) -> None:
                                    "setters, output getters), NAME.c, NAME_casadi.c (the "
                                    "step function), a host harness writing the CSV of "
                                    "`mechatron simulate --out`, and a Makefile.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     _add_solver(p)
     p.add_argument("--out", metavar="DIR", required=True, help="directory for the C files")
     p.add_argument("--check", action="store_true",
@@ -67,7 +69,7 @@ def add_fmu(sub) -> None:
                                    "co-simulation (the fixed-step solver inside) or model "
                                    "exchange, or FMI 3.0 co-simulation. The FMU holds its "
                                    "C sources and a binary for this platform.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--fmi", choices=["2", "3"], default="2", help="FMI version")
     p.add_argument("--kind", choices=["cs", "me"], default="cs",
                    help="co-simulation or model exchange (default: cs)")
@@ -79,7 +81,7 @@ def add_fmu(sub) -> None:
 
 def _resolve(args):
     from mechatron.cli import _parse_sets
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     params = _parse_sets(args.set, entry)
     variant = args.variant or entry.default_variant
     dt = args.dt if args.dt is not None else entry.experiment.dt
@@ -91,6 +93,9 @@ def _resolve(args):
     if args.iterations < 1:
         raise CommandError(f"--iterations: at least 1, got {args.iterations}.")
     t_stop = args.t_stop if args.t_stop is not None else entry.experiment.t_stop
+    if not (np.isfinite(t_stop) and t_stop > 0):
+        raise CommandError(f"--t-stop: the end time must be a number > 0, got {t_stop!r}.")
+    check_step_count(float(dt), t_stop)      # the harness run and the desktop comparison
     model = entry.build(variant, **params)
     return entry, variant, params, float(dt), float(t_stop), model
 

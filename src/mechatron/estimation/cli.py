@@ -14,7 +14,8 @@ import sys
 import time
 from pathlib import Path
 
-from mechatron.cli import add_json, emit, emit_json, jsonable, table
+from mechatron._io import write_text
+from mechatron.cli import CommandError, add_json, emit, emit_json, jsonable, table
 
 __all__ = ["add_commands", "Progress"]
 
@@ -67,6 +68,7 @@ def _out_dir(path: str | None) -> Path | None:
 def cmd_estimate(args: argparse.Namespace) -> int:
     from mechatron.estimation.config import build_estimation, load_config
     from mechatron.estimation.problem import estimate
+    _positive("--max-iterations", args.max_iterations)
     cfg = load_config(args.config)
     out = _out_dir(args.out)
     t0 = time.perf_counter()
@@ -94,8 +96,9 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         lo, hi = res.ci95[name]
         rows.append([name, f"{res.initial[j]:.6g}", f"{res.values[j]:.6g}",
                      f"[{lo:.6g}, {hi:.6g}]",
-                     f"{100 * res.std[j] / abs(res.values[j]):.2f}%" if res.values[j] else "-"])
-    emit(table(["parameter", "start", "estimate", "95% interval", "rel. std"], rows,
+                     f"{100 * res.std[j] / abs(res.values[j]):.2f}%" if res.values[j] else "-",
+                     _bound_note(res.at_bound.get(name))])
+    emit(table(["parameter", "start", "estimate", "95% interval", "rel. std", "note"], rows,
                right="1234"))
     emit("  fit (NRMSE, 0 = perfect): " + "; ".join(
         f"{e}: " + ", ".join(f"{lab} {v0:.3g} -> {v:.3g}"
@@ -111,6 +114,37 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bound_note(hit: dict | None) -> str:
+    if not hit:
+        return ""
+    return f"AT {'LOWER' if hit['side'] == 'min' else 'UPPER'} BOUND {hit['bound']:g}"
+
+
+def _positive(option: str, value: int | None, minimum: int = 1) -> None:
+    if value is not None and value < minimum:
+        raise CommandError(f"{option}: at least {minimum}, got {value}.")
+
+
+def _sobol_flags(res, j: int) -> list[str]:
+    """``"!"`` beside a total Sobol index outside [0, 1] (see ``res.warnings``)."""
+    if res.ST is None:
+        return [""] * len(res.requirements)
+    hi = res.intervals.get("ST_high")
+    return ["!" if res.ST[j, a] > 1 or (res.ST[j, a] < 0 and hi is not None
+                                         and hi[j, a] < 0) else ""
+            for a in range(len(res.requirements))]
+
+
+def _need_dask(where: str) -> None:
+    import importlib.util
+    if importlib.util.find_spec("dask") is None or \
+            importlib.util.find_spec("distributed") is None:
+        raise CommandError(f"{where}: evaluating on a Dask cluster needs the packages dask "
+                           "and distributed, which are not installed (pip install "
+                           "\"dask[distributed]\"); or drop it to run on local processes "
+                           "(--workers N).")
+
+
 def _save(out: Path | None, doc: dict, plots, name: str) -> list[Path]:
     """Write the plots (callables taking a path, by file name) and ``doc`` as
     ``name.json`` into ``out``; record the files in ``doc``. Nothing without ``out``."""
@@ -118,7 +152,7 @@ def _save(out: Path | None, doc: dict, plots, name: str) -> list[Path]:
         return []
     files = [plot(out / file) for file, plot in plots.items()]
     path = out / f"{name}.json"
-    path.write_text(json.dumps(jsonable(doc), indent=2))
+    write_text(path, json.dumps(jsonable(doc), indent=2))
     files.append(path)
     doc["files"] = [str(f) for f in files]
     return files
@@ -128,6 +162,8 @@ def _save(out: Path | None, doc: dict, plots, name: str) -> list[Path]:
 def cmd_sensitivity(args: argparse.Namespace) -> int:
     from mechatron.estimation.config import build_sensitivity, load_config
     from mechatron.estimation.sensitivity import run_sensitivity
+    _positive("--samples", args.samples, 2)
+    _positive("--workers", args.workers)
     cfg = load_config(args.config)
     out = _out_dir(args.out)
     prob, dists, opts = build_sensitivity(cfg)
@@ -135,6 +171,8 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     method = args.method or opts.get("method", "sobol")
     workers = args.workers if args.workers is not None else opts.get("workers")
     address = args.dask or opts.get("address")
+    if address:
+        _need_dask(args.dask and "--dask" or "[sensitivity] address")
     total = n * (len(dists) + 2) if method == "sobol" else n
     bar = Progress("sensitivity", total, enabled=not args.quiet)
     res = run_sensitivity(prob, dists, n=n, method=method, seed=int(opts.get("seed", 0)),
@@ -157,11 +195,16 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     rows = []
     for name in res.ranking:
         j = res.names.index(name)
-        rows.append([name] + [f"{measure[j, a]:+.3f}" for a in range(len(res.requirements))]
+        flag = _sobol_flags(res, j)
+        rows.append([name] + [f"{measure[j, a]:+.3f}{flag[a]}"
+                              for a in range(len(res.requirements))]
                     + [f"{res.spearman[j, a]:+.2f}" for a in range(len(res.requirements))])
     emit(f"  ranking by {head} (then Spearman correlation), most important first:")
     emit(table(["parameter"] + res.requirements + [f"rho {r}" for r in res.requirements],
                rows, right="".join(str(k) for k in range(1, 2 * len(res.requirements) + 1))))
+    if res.warnings:
+        emit(f"  ! {len(res.warnings)} Sobol index/indices outside [0, 1] (sampling "
+             f"error; see the warnings): use more samples than {n}, e.g. --samples {4 * n}.")
     emit("  best samples (starting values for `mechatron estimate`):")
     emit(table(res.names + ["cost"],
                [[f"{b[nm]:.6g}" for nm in res.names] + [f"{b['cost']:.6g}"]
@@ -175,6 +218,7 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
 def cmd_optimize(args: argparse.Namespace) -> int:
     from mechatron.estimation.config import build_response, load_config
     from mechatron.estimation.optimize import optimize_response, verify
+    _positive("--max-iterations", args.max_iterations)
     cfg = load_config(args.config)
     out = _out_dir(args.out)
     prob = build_response(cfg)
@@ -194,8 +238,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         return 0
     emit(f"{cfg.get('title', args.config)}")
     emit(f"  {res.iterations} SQP iterations in {res.wall_time:.2f} s; {res.message}")
-    emit(table(["design variable", "start", "optimized"],
-               [[n, f"{a:.6g}", f"{b:.6g}"] for n, a, b in
+    emit(table(["design variable", "start", "optimized", "note"],
+               [[n, f"{a:.6g}", f"{b:.6g}", _bound_note(res.at_bound.get(n))] for n, a, b in
                 zip(res.names, res.initial, res.values)], right="12"))
     emit("  requirements, checked by an independent variable-step simulation:")
     emit(table(["requirement", "limit", "start", "optimized", "met"],

@@ -7,26 +7,45 @@ the model parameter they set. Unknown keys are errors (a typo must not be ignore
 
 from __future__ import annotations
 
-import importlib
+import logging
+import math
 import tomllib
 from pathlib import Path
 
 
 import mechatron as mt
-from mechatron.errors import DataError, ParameterError
+from mechatron.errors import DataError, ModelError, ParameterError, UnitError
 from mechatron.estimation.data import Experiment, load_experiment
-from mechatron.units import to_si
+from mechatron.units import to_base, to_si
 
 __all__ = ["load_config", "build_model", "build_estimation", "build_sensitivity",
            "build_response", "generate_bench_data"]
+
+log = logging.getLogger(__name__)
 
 _TOP = {"model", "experiments", "parameters", "fixed", "offsets", "free_x0",
         "virtual_bench", "options", "sensitivity", "requirements", "design", "simulation",
         "inputs", "outputs", "title"}
 
+#: Keys of each ``[[requirements]]`` type, with the check of each value.
+_REQUIREMENT_KEYS = {
+    "step": {"signal", "final", "initial", "t_step", "rise_time", "rise", "overshoot",
+             "settling_time", "settling"},
+    "bound": {"signal", "lower", "upper", "t_start", "t_end"},
+    "tracking": {"signal", "reference", "weight"},
+}
+_BENCH_RUNS = ("locked_rotor", "voltage_step", "multi_step")
+
 
 def load_config(path) -> dict:
-    """Read a problem file; ``cfg["_dir"]`` is its folder and ``cfg["_path"]`` its path."""
+    """Read and check a problem file; ``cfg["_dir"]`` is its folder and ``cfg["_path"]``
+    its path.
+
+    Every problem of the file is collected (unknown keys, wrong types, impossible values
+    such as a noise level <= 0, zero samples or substeps, a lower bound above the upper
+    one), each named by file, table and key, and raised as one :class:`DataError`.
+    Checks that need the model (parameter names, units) follow when it is built.
+    """
     path = Path(path)
     if not path.exists():
         raise DataError(f"{path}: no such file.", path=str(path))
@@ -34,33 +53,329 @@ def load_config(path) -> dict:
         cfg = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise DataError(f"{path}: not valid TOML ({exc}).", path=str(path)) from None
-    unknown = sorted(set(cfg) - _TOP)
-    if unknown:
-        raise DataError(f"{path}: unknown section(s) {', '.join(unknown)}; known: "
-                        f"{', '.join(sorted(_TOP))}.", path=str(path))
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: not a text file ({exc}).", path=str(path)) from None
+    problems = check_config(cfg, str(path))
+    if problems:
+        short = [p.removeprefix(f"{path}: ") for p in problems]
+        raise DataError(f"{path}: {len(problems)} problem(s): " + "; ".join(short),
+                        problems=problems, path=str(path))
     cfg["_dir"] = path.parent
     cfg["_path"] = str(path)
     return cfg
 
 
+class _Checks:
+    """Collects problems of a problem file as ``[table] key: what is wrong``."""
+
+    def __init__(self):
+        self.problems: list[str] = []
+
+    def add(self, where: str, text: str) -> None:
+        self.problems.append(f"{where}: {text}")
+
+    def keys(self, where: str, table, allowed, required=()) -> bool:
+        """``table`` is a table with only ``allowed`` keys and every ``required`` one."""
+        if not isinstance(table, dict):
+            self.add(where, f"expected a table, got {_show(table)}")
+            return False
+        unknown = sorted(set(table) - set(allowed))
+        if unknown:
+            self.add(where, f"unknown key(s) {', '.join(unknown)}; known: "
+                            f"{', '.join(sorted(allowed))}")
+        for key in required:
+            if key not in table:
+                self.add(where, f"missing '{key}'")
+        return True
+
+    def number(self, where: str, value, *, positive=False, nonnegative=False,
+               integer=False, minimum=None, units=False):
+        """A finite number (or with ``units`` a quantity string); returns it in SI base
+        units, or None when it is not one (a problem is recorded)."""
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            self.add(where, f"expected a {'whole ' if integer else ''}number, got "
+                            f"{_show(value)}")
+            return None
+        if isinstance(value, str):
+            if not units:
+                self.add(where, f"expected a number, got the text {value!r}")
+                return None
+            try:
+                x = to_base(value, where)
+            except UnitError as exc:
+                self.add(where, str(exc).split(": ", 1)[-1].rstrip("."))
+                return None
+        else:
+            x = float(value)
+        if integer and (isinstance(value, float) and not x.is_integer()):
+            self.add(where, f"expected a whole number, got {value!r}")
+            return None
+        if not math.isfinite(x):
+            self.add(where, f"expected a finite number, got {value!r}")
+            return None
+        if positive and not x > 0:
+            self.add(where, f"must be > 0, got {value!r}")
+            return None
+        if nonnegative and x < 0:
+            self.add(where, f"must be >= 0, got {value!r}")
+            return None
+        if minimum is not None and x < minimum:
+            self.add(where, f"must be at least {minimum}, got {value!r}")
+            return None
+        return x
+
+    def text(self, where: str, value, choices=None) -> None:
+        if not isinstance(value, str):
+            self.add(where, f"expected a text, got {_show(value)}")
+        elif choices is not None and value not in choices:
+            self.add(where, f"must be one of {', '.join(choices)}, got {value!r}")
+
+    def names(self, where: str, value, *, mapping_ok=False) -> None:
+        ok = isinstance(value, list) and all(isinstance(v, str) for v in value)
+        if mapping_ok and isinstance(value, dict):
+            ok = all(isinstance(v, str) for v in value.values())
+        if not ok:
+            self.add(where, "expected a list of names" + (" or a table of names"
+                                                          if mapping_ok else "")
+                     + f", got {_show(value)}")
+
+    def values(self, where: str, table, *, positive=False) -> None:
+        """A table whose values are numbers or quantities (e.g. ``[fixed]``)."""
+        if self.keys(where, table, table if isinstance(table, dict) else ()):
+            for key, value in table.items():
+                self.number(f"{where} {key}", value, units=True, positive=positive)
+
+    def bounds(self, where: str, spec) -> None:
+        """A free parameter or design variable: a value, or ``{initial, min, max,
+        scale}`` with min < max and the initial value between them."""
+        if not isinstance(spec, dict):
+            self.number(where, spec, units=True)
+            return
+        self.keys(where, spec, ("initial", "min", "max", "scale"))
+        v = {k: self.number(f"{where}.{k}", spec[k], units=True, positive=k == "scale")
+             for k in ("initial", "min", "max", "scale") if k in spec}
+        lo, hi, x0 = v.get("min"), v.get("max"), v.get("initial")
+        if lo is not None and hi is not None and not lo < hi:
+            self.add(where, f"the lower bound min = {spec['min']!r} is not below the upper "
+                            f"bound max = {spec['max']!r}")
+        elif x0 is not None and ((lo is not None and x0 < lo) or (hi is not None and x0 > hi)):
+            self.add(where, f"initial = {spec['initial']!r} is outside "
+                            f"[{spec.get('min', '-inf')!r}, {spec.get('max', 'inf')!r}]")
+
+
+def _show(value) -> str:
+    kind = {dict: "a table", list: "a list", str: "a text", bool: "a boolean"}.get(
+        type(value), type(value).__name__)
+    return f"{kind} {value!r}" if not isinstance(value, dict) else kind
+
+
+def check_config(cfg: dict, path: str = "config") -> list[str]:
+    """Every problem of a problem file (as read by :mod:`tomllib`), each as
+    ``<path>: [table] key: what is wrong``; empty when the file is sound."""
+    c = _Checks()
+    unknown = sorted(k for k in set(cfg) - _TOP if not k.startswith("_"))   # _dir, _path
+    if unknown:
+        c.add("top level", f"unknown section(s) {', '.join(unknown)}; known: "
+                           f"{', '.join(sorted(_TOP))}")
+    if "title" in cfg:
+        c.text("title", cfg["title"])
+    for key in ("offsets", "free_x0"):
+        if key in cfg:
+            c.names(key, cfg[key])
+
+    model = cfg.get("model", {})
+    if c.keys("[model]", model, ("name", "variant", "set"), required=("name",)):
+        if "name" in model:
+            c.text("[model] name", model["name"])
+        if "variant" in model:
+            c.text("[model] variant", model["variant"])
+        if "set" in model:
+            c.values("[model] set", model["set"])
+
+    vb = cfg.get("virtual_bench")
+    if vb is not None and c.keys("[virtual_bench]", vb, ("seed", "stribeck", "runs")):
+        if "seed" in vb:
+            c.number("[virtual_bench] seed", vb["seed"], integer=True, nonnegative=True)
+        if "stribeck" in vb and not isinstance(vb["stribeck"], bool):
+            c.add("[virtual_bench] stribeck", f"expected true or false, got "
+                                              f"{_show(vb['stribeck'])}")
+        runs = vb.get("runs", {})
+        if c.keys("[virtual_bench] runs", runs, _BENCH_RUNS):
+            for run, file in runs.items():
+                c.text(f"[virtual_bench] runs.{run}", file)
+
+    experiments = cfg.get("experiments", [])
+    if not isinstance(experiments, list):
+        c.add("[[experiments]]", "expected an array of tables ([[experiments]]), got "
+                                 f"{_show(experiments)}")
+        experiments = []
+    for k, exp in enumerate(experiments, 1):
+        where = f"[[experiments]] {k}" + (f" ({exp['name']})" if isinstance(exp, dict)
+                                          and isinstance(exp.get("name"), str) else "")
+        if not c.keys(where, exp, ("name", "file", "time", "inputs", "outputs", "units",
+                                   "params", "x0", "hold", "sigma"), required=("file",)):
+            continue
+        for key in ("name", "file", "time"):
+            if key in exp:
+                c.text(f"{where} {key}", exp[key])
+        for key in ("inputs", "outputs"):
+            if key in exp:
+                c.names(f"{where} {key}", exp[key], mapping_ok=True)
+        if "hold" in exp:
+            c.text(f"{where} hold", exp["hold"], ("zoh", "linear"))
+        if "units" in exp and c.keys(f"{where} units", exp["units"],
+                                     exp["units"] if isinstance(exp["units"], dict) else ()):
+            for label, unit in exp["units"].items():
+                c.text(f"{where} units.{label}", unit)
+        for key in ("params", "x0"):
+            if key in exp:
+                c.values(f"{where} {key}", exp[key])
+        if "sigma" in exp and isinstance(exp["sigma"], dict):
+            outputs = exp.get("outputs", [])
+            for label, value in exp["sigma"].items():
+                c.number(f"{where} sigma.{label}", value, positive=True)
+                if isinstance(outputs, (list, dict)) and outputs and label not in outputs:
+                    c.add(f"{where} sigma.{label}", f"'{label}' is not an output of this "
+                          f"experiment ({', '.join(outputs)})")
+        elif "sigma" in exp:
+            c.add(f"{where} sigma", f"expected a table, got {_show(exp['sigma'])}")
+
+    for table in ("inputs", "outputs"):
+        if table in cfg and c.keys(f"[{table}]", cfg[table], cfg[table]
+                                   if isinstance(cfg[table], dict) else ()):
+            for label, target in cfg[table].items():
+                c.text(f"[{table}] {label}", target)
+
+    for table in ("parameters", "design"):
+        spec = cfg.get(table, {})
+        if c.keys(f"[{table}]", spec, spec if isinstance(spec, dict) else ()):
+            for name, entry in spec.items():
+                c.bounds(f"[{table}] {name}", entry)
+    if "fixed" in cfg:
+        c.values("[fixed]", cfg["fixed"])
+
+    opts = cfg.get("options", {})
+    if c.keys("[options]", opts, ("substeps", "jit")):
+        if "substeps" in opts:
+            c.number("[options] substeps", opts["substeps"], integer=True, minimum=1)
+        if "jit" in opts and opts["jit"] not in (True, False, "auto"):
+            c.add("[options] jit", f"must be true, false or \"auto\", got {opts['jit']!r}")
+
+    sens = cfg.get("sensitivity")
+    if sens is not None and c.keys("[sensitivity]", sens, ("samples", "method", "seed",
+                                                           "workers", "best", "address",
+                                                           "distributions")):
+        if "samples" in sens:
+            c.number("[sensitivity] samples", sens["samples"], integer=True, minimum=2)
+        if "method" in sens:
+            c.text("[sensitivity] method", sens["method"], ("random", "lhs", "sobol"))
+        if "seed" in sens:
+            c.number("[sensitivity] seed", sens["seed"], integer=True, nonnegative=True)
+        for key in ("workers", "best"):
+            if key in sens:
+                c.number(f"[sensitivity] {key}", sens[key], integer=True, minimum=1)
+        if "address" in sens:
+            c.text("[sensitivity] address", sens["address"])
+        dists = sens.get("distributions", {})
+        if c.keys("[sensitivity.distributions]", dists,
+                  dists if isinstance(dists, dict) else ()):
+            for name, d in dists.items():
+                _check_distribution(c, f"[sensitivity.distributions] {name}", d)
+
+    sim = cfg.get("simulation")
+    if sim is not None and c.keys("[simulation]", sim, ("t_stop", "points", "signals")):
+        if "t_stop" in sim:
+            c.number("[simulation] t_stop", sim["t_stop"], positive=True)
+        if "points" in sim:
+            c.number("[simulation] points", sim["points"], integer=True, minimum=2)
+        if "signals" in sim:
+            c.names("[simulation] signals", sim["signals"], mapping_ok=True)
+
+    reqs = cfg.get("requirements", [])
+    if not isinstance(reqs, list):
+        c.add("[[requirements]]", f"expected an array of tables, got {_show(reqs)}")
+        reqs = []
+    for k, req in enumerate(reqs, 1):
+        _check_requirement(c, f"[[requirements]] {k}", req)
+    return [f"{path}: {p}" for p in c.problems]
+
+
+def _check_distribution(c: _Checks, where: str, d) -> None:
+    if not isinstance(d, dict):
+        c.add(where, f"expected a table such as {{ kind = \"uniform\", low = 5, high = 10 }}"
+                     f", got {_show(d)}")
+        return
+    kind = d.get("kind", "uniform")
+    if kind not in ("uniform", "normal", "loguniform"):
+        c.add(f"{where} kind", f"must be uniform, normal or loguniform, got {kind!r}")
+        return
+    keys = ("mean", "std") if kind == "normal" else ("low", "high")
+    c.keys(where, d, ("kind", *keys), required=keys)
+    v = {k: c.number(f"{where}.{k}", d[k], units=True) for k in keys if k in d}
+    if kind == "normal":
+        if v.get("std") is not None and not v["std"] > 0:
+            c.add(f"{where}.std", f"must be > 0, got {d['std']!r}")
+        return
+    lo, hi = v.get("low"), v.get("high")
+    if lo is not None and hi is not None and not lo < hi:
+        c.add(where, f"low = {d['low']!r} is not below high = {d['high']!r}")
+    if kind == "loguniform" and lo is not None and not lo > 0:
+        c.add(f"{where}.low", f"a loguniform distribution needs low > 0, got {d['low']!r}")
+
+
+def _check_requirement(c: _Checks, where: str, req) -> None:
+    if not isinstance(req, dict):
+        c.add(where, f"expected a table, got {_show(req)}")
+        return
+    kind = req.get("type")
+    if kind not in _REQUIREMENT_KEYS:
+        c.add(f"{where} type", f"must be step, bound or tracking, got {kind!r}")
+        return
+    where = f"{where} ({kind})"
+    c.keys(where, req, {"type", *_REQUIREMENT_KEYS[kind]},
+           required=("signal", "final") if kind == "step" else ("signal",))
+    if "signal" in req:
+        c.text(f"{where} signal", req["signal"])
+    num = {}
+    for key in _REQUIREMENT_KEYS[kind] - {"signal", "reference"}:
+        if key in req:
+            positive = key in ("rise_time", "settling_time", "settling", "weight")
+            num[key] = c.number(f"{where} {key}", req[key], positive=positive,
+                                nonnegative=key in ("overshoot", "t_step", "t_start"))
+    if "reference" in req:
+        c.number(f"{where} reference", req["reference"])
+    if num.get("rise") is not None and not 0 < num["rise"] <= 100:
+        c.add(f"{where} rise", f"a percentage of the step in (0, 100], got {req['rise']!r}")
+    for lo, hi in (("lower", "upper"), ("t_start", "t_end")):
+        if num.get(lo) is not None and num.get(hi) is not None and not num[lo] < num[hi]:
+            c.add(where, f"{lo} = {req[lo]!r} is not below {hi} = {req[hi]!r}")
+
+
 def build_model(cfg: dict):
     """The model named by ``[model] name``: a database entry (``"dc_motor"``, with
-    optional ``variant`` and ``set``) or ``"package.module:Callable"`` returning a model."""
+    optional ``variant`` and ``set``), a user's file (``"motor.py"`` or
+    ``"motor.py:ClassName"``, relative to the problem file) or ``"package.module:Class"``;
+    a class must be a concrete :class:`~mechatron.Component` subclass, checked before it
+    is called (see :mod:`mechatron.models.user`). ``set`` gives parameter values."""
+    from mechatron.models.user import component_class
+    where = cfg.get("_path", "config")
     spec = cfg.get("model", {})
     name = spec.get("name")
     if not name:
-        raise DataError(f"{cfg.get('_path', 'config')}: [model] needs a 'name': a database "
-                        "entry (see `mechatron models`) or 'module:Class'.")
-    if ":" in name:
-        module, _, attr = name.partition(":")
-        try:
-            obj = getattr(importlib.import_module(module), attr)
-        except (ImportError, AttributeError) as exc:
-            raise DataError(f"{cfg.get('_path')}: [model] name '{name}': cannot import "
-                            f"({exc}).") from None
-        return obj()
-    entry = mt.models.get(name)
-    return entry.build(spec.get("variant"), **spec.get("set", {}))
+        raise DataError(f"{where}: [model] needs a 'name': a database entry (see "
+                        "`mechatron models`), a file 'model.py[:Class]' or "
+                        "'package.module:Class'.", path=where)
+    try:
+        cls = component_class(name, base=cfg.get("_dir"))
+    except ModelError as exc:
+        raise ModelError(f"{where}: [model] name: {exc}", path=where) from None
+    if cls is None:
+        entry = mt.models.get(name)
+        return entry.build(spec.get("variant"), **spec.get("set", {}))
+    if "variant" in spec:
+        raise DataError(f"{where}: [model] variant: '{name}' is a class, which has no "
+                        "variants; remove the key.", path=where)
+    return cls(**spec.get("set", {}))
 
 
 def _value(raw, unit: str, where: str) -> float:
@@ -108,6 +423,8 @@ def generate_bench_data(cfg: dict, *, force: bool = False) -> list[Path]:
         if run not in ("locked_rotor", "voltage_step", "multi_step"):
             raise DataError(f"{cfg['_path']}: [virtual_bench] runs: unknown run '{run}'; "
                             "use locked_rotor, voltage_step or multi_step.")
+        log.info("virtual bench: generating %s (%s run, seed %s)", path, run,
+                 vb.get("seed", 0))
         exp = getattr(bench, run)()
         written.append(exp.save(path))
     return written

@@ -18,12 +18,14 @@ header is row 1, the first data row is row 2; for a DataFrame, the index label):
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from mechatron._io import atomic_path
 from mechatron.errors import DataError, UnitError
 from mechatron.units import to_si
 
@@ -130,6 +132,14 @@ class Experiment:
                 problems.append(f"{self.where('t', k)}: time {self.t[k]:g} s does not "
                                 f"increase (previous {self.t[k - 1]:g} s; {bad.size} such "
                                 "row(s)). Sort the data or drop duplicate samples.")
+        for label, sigma in self.sigma.items():
+            try:
+                value = float(sigma)
+            except (TypeError, ValueError):
+                value = math.nan
+            if not (math.isfinite(value) and value > 0):
+                problems.append(f"{self.source}: experiment '{self.name}': sigma of "
+                                f"'{label}' is a noise level and must be > 0, got {sigma!r}.")
         for label, unit in self.units.items():
             try:
                 to_si(f"1 {unit}", unit, label) if unit else None
@@ -169,10 +179,11 @@ class Experiment:
                       if self.units.get(c, "s" if c == "t" else "") else c
                       for c in df.columns]
         path.parent.mkdir(parents=True, exist_ok=True)
-        if path.suffix == ".parquet":
-            df.to_parquet(path, index=False)
-        else:
-            df.to_csv(path, index=False, float_format="%.10g")
+        with atomic_path(path) as tmp:
+            if path.suffix == ".parquet":
+                df.to_parquet(tmp, index=False)
+            else:
+                df.to_csv(tmp, index=False, float_format="%.10g")
         return path
 
     # ------------------------------------------------------------------------------------
@@ -236,7 +247,14 @@ class Experiment:
         path = Path(path)
         if not path.exists():
             raise DataError(f"{path}: no such file.", path=str(path))
-        df = pd.read_csv(path)
+        try:
+            df = pd.read_csv(path)
+        except pd.errors.EmptyDataError:
+            raise DataError(f"{path}: the file is empty; expected a header row (t and the "
+                            "signals) and rows of numbers.", path=str(path)) from None
+        except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+            raise DataError(f"{path}: cannot read it as CSV ({exc}).",
+                            path=str(path)) from None
         return cls.from_frame(df, source=str(path), **kwargs)
 
     @classmethod
@@ -246,7 +264,11 @@ class Experiment:
         path = Path(path)
         if not path.exists():
             raise DataError(f"{path}: no such file.", path=str(path))
-        df = pd.read_parquet(path)
+        try:
+            df = pd.read_parquet(path)
+        except Exception as exc:    # pyarrow raises several types for a broken file
+            raise DataError(f"{path}: cannot read it as Parquet ({exc}).",
+                            path=str(path)) from None
         return cls.from_frame(df, source=str(path), **kwargs)
 
 

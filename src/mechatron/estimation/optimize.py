@@ -30,6 +30,7 @@ signal bounds on a fine grid with plain NumPy.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass, field
@@ -38,8 +39,12 @@ from pathlib import Path
 import numpy as np
 
 import mechatron as mt
+from mechatron._io import save_figure
 from mechatron.errors import ParameterError
+from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.discretize import Trajectory, choose_substeps, fastest_time_constant
+
+log = logging.getLogger(__name__)
 
 __all__ = ["DesignVariable", "StepResponse", "SignalBound", "Tracking", "ResponseProblem",
            "ResponseResult", "optimize_response", "verify", "step_metrics"]
@@ -54,6 +59,9 @@ class DesignVariable:
     min: float = -math.inf
     max: float = math.inf
     scale: float | None = None
+
+    def __post_init__(self):
+        check_bounds(self, "design variable")
 
 
 @dataclass
@@ -275,6 +283,10 @@ class ResponseResult:
     success: bool
     message: str
     problem: ResponseProblem = field(repr=False, default=None)
+    #: Design variables that ended on a bound: ``{name: {"side", "bound"}}`` (see
+    #: :func:`~mechatron.estimation.bounds.at_bounds`); such a value is not an interior
+    #: optimum.
+    at_bound: dict = field(default_factory=dict)
 
     @property
     def parameters(self) -> dict:
@@ -283,6 +295,7 @@ class ResponseResult:
     def to_dict(self) -> dict:
         return {"parameters": self.parameters,
                 "initial": dict(zip(self.names, map(float, self.initial))),
+                "at_bound": self.at_bound,
                 "objective_initial": self.objective_initial, "objective": self.objective,
                 "max_violation_initial": self.max_violation_initial,
                 "max_violation": self.max_violation, "iterations": self.iterations,
@@ -323,7 +336,7 @@ class ResponseResult:
         axes[-1].set_xlabel("t [s]")
         fig.suptitle("response optimization")
         path = Path(path)
-        fig.savefig(path, dpi=90)
+        save_figure(fig, path, dpi=90)
         return path
 
 
@@ -373,13 +386,19 @@ def optimize_response(problem: ResponseProblem, *, max_iterations: int = 100,
     x = sol.x * sc
     if not history or history[-1]["x"] != x.tolist():
         record(sol.x)
-    return ResponseResult(names=[d.name for d in prob.design], initial=prob.x0, values=x,
+    names = [d.name for d in prob.design]
+    hits = at_bounds(names, x, [d.min for d in prob.design], [d.max for d in prob.design],
+                     [d.scale for d in prob.design])
+    message = str(sol.message)
+    if hits:
+        log.warning("optimize: %s", describe_at_bounds(hits, "gain"))
+    return ResponseResult(names=names, initial=prob.x0, values=x,
                           objective_initial=f0, objective=prob.objective(x)[0],
                           max_violation_initial=v0, max_violation=viol(x),
                           history=history, iterations=int(sol.nit),
                           wall_time=time.perf_counter() - start,
                           success=bool(sol.success) and viol(x) <= 1e-6,
-                          message=str(sol.message), problem=prob)
+                          message=message, problem=prob, at_bound=hits)
 
 
 # ---------------------------------------------------------------------- verification

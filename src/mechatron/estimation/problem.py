@@ -39,6 +39,7 @@ is ``100 (1 - NRMSE)``).
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass, field
@@ -47,12 +48,16 @@ from pathlib import Path
 import numpy as np
 
 import mechatron as mt
+from mechatron._io import save_figure
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import DataError, ParameterError
+from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.data import unit_factor
 from mechatron.estimation.native import compiler
 from mechatron.estimation.discretize import (Trajectory, check_model, choose_substeps,
                                              fastest_time_constant)
+
+log = logging.getLogger(__name__)
 
 __all__ = ["FreeParameter", "EstimationProblem", "EstimationResult", "estimate"]
 
@@ -69,6 +74,9 @@ class FreeParameter:
     min: float = -math.inf
     max: float = math.inf
     scale: float | None = None
+
+    def __post_init__(self):
+        check_bounds(self, "free parameter")
 
 
 def _as_free(spec) -> FreeParameter:
@@ -118,6 +126,11 @@ class EstimationProblem:
     def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
                  offsets=(), free_x0=(), substeps=None, max_substeps: int = 400,
                  step_ratio: float = 4.0, jit="auto"):
+        for m in (substeps if isinstance(substeps, (list, tuple)) else [substeps]):
+            if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer))
+                                  or m < 1):
+                raise ParameterError(f"estimation: substeps must be a whole number >= 1 "
+                                     f"(or None to choose them), got {substeps!r}.")
         self.cm = compiled(model)
         check_model(self.cm, "estimation")
         cm = self.cm
@@ -475,6 +488,10 @@ class EstimationResult:
     success: bool
     message: str
     problem: EstimationProblem = field(repr=False, default=None)
+    #: Parameters that ended on a bound of ``min``/``max``: ``{name: {"side", "bound"}}``
+    #: (see :func:`~mechatron.estimation.bounds.at_bounds`); their intervals assume an
+    #: interior optimum and do not hold there.
+    at_bound: dict = field(default_factory=dict)
 
     @property
     def parameters(self) -> dict:
@@ -483,6 +500,7 @@ class EstimationResult:
     def to_dict(self) -> dict:
         return {"parameters": self.parameters,
                 "initial": dict(zip(self.names, map(float, self.initial))),
+                "at_bound": self.at_bound,
                 "ci95": {k: [float(lo), float(hi)] for k, (lo, hi) in self.ci95.items()},
                 "std": dict(zip(self.names, map(float, self.std))),
                 "correlation": {"names": self.names,
@@ -521,7 +539,7 @@ class EstimationResult:
         axes[-1, 0].set_xlabel("t [s]")
         fig.suptitle("parameter estimation: measured vs model before/after")
         path = Path(path)
-        fig.savefig(path, dpi=90)
+        save_figure(fig, path, dpi=90)
         return path
 
     def plot_trajectory(self, path) -> Path:
@@ -541,7 +559,7 @@ class EstimationResult:
         axes[1].set_xlabel("iteration")
         axes[1].grid(True, alpha=0.3)
         path = Path(path)
-        fig.savefig(path, dpi=90)
+        save_figure(fig, path, dpi=90)
         return path
 
 
@@ -689,10 +707,14 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
     wall = time.perf_counter() - start
+    lo_b, hi_b = prob.bounds
+    hits = at_bounds(prob.names, theta, lo_b, hi_b)
+    if hits:
+        log.warning("estimate: %s", describe_at_bounds(hits, "estimate"))
     return EstimationResult(
         names=list(prob.names), initial=prob.initial, values=theta, std=std, ci95=ci,
         correlation=corr, cost_initial=cost0, cost=cost,
         nrmse=_nrmse(prob, prob.simulate(theta)),
         nrmse_initial=_nrmse(prob, prob.simulate(prob.initial)), history=history,
         iterations=len(history) - 1, evaluations=counts["sims"], wall_time=wall,
-        success=bool(success), message=message, problem=prob)
+        success=bool(success), message=message, problem=prob, at_bound=hits)

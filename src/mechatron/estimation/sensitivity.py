@@ -30,6 +30,7 @@ Comput. Phys. Commun. 181 (2010) 259-270; M. J. W. Jansen, Comput. Phys. Commun.
 from __future__ import annotations
 
 import copy
+import logging
 import math
 import os
 import time
@@ -39,11 +40,15 @@ from pathlib import Path
 
 import numpy as np
 
+from mechatron._io import save_figure
 from mechatron.errors import ParameterError
 from mechatron.estimation.native import compiler
 
+log = logging.getLogger(__name__)
+
 __all__ = ["Distribution", "sample", "SensitivityResult", "run_sensitivity",
-           "local_sensitivity", "sobol_indices", "standardized_regression"]
+           "local_sensitivity", "sobol_indices", "sobol_intervals", "sobol_warnings",
+           "standardized_regression"]
 
 
 @dataclass(frozen=True)
@@ -136,6 +141,63 @@ def sobol_indices(fA: np.ndarray, fB: np.ndarray, fAB: np.ndarray):
     return S1, ST
 
 
+def sobol_intervals(fA: np.ndarray, fB: np.ndarray, fAB: np.ndarray, *,
+                    resamples: int = 500, level: float = 0.95, seed: int = 0):
+    """Bootstrap confidence intervals of :func:`sobol_indices`.
+
+    The ``n`` rows of the design are resampled with replacement ``resamples`` times (the
+    same rows for ``fA``, ``fB`` and every ``fAB_i``) and the indices recomputed; the
+    interval is the central ``level`` range of the recomputed values (percentile
+    bootstrap, as SALib does). Returns ``(S1_low, S1_high, ST_low, ST_high)``, each of
+    length ``d``.
+    """
+    n, d = len(fA), len(fAB)
+    out = [np.full(d, np.nan) for _ in range(4)]
+    if n < 2:
+        return tuple(out)
+    idx = np.random.default_rng(seed).integers(0, n, size=(resamples, n))
+    a, b = fA[idx], fB[idx]                               # (resamples, n)
+    V = np.var(np.concatenate([a, b], axis=1), axis=1)    # (resamples,)
+    V = np.where(V > 0, V, np.nan)
+    q = [50 * (1 - level), 50 * (1 + level)]
+    if np.all(np.isnan(V)):
+        return tuple(out)
+    for i in range(d):                                    # memory: one parameter at once
+        ab = fAB[i][idx]
+        S1 = np.mean(b * (ab - a), axis=1) / V
+        ST = 0.5 * np.mean((a - ab) ** 2, axis=1) / V
+        (out[0][i], out[1][i]), (out[2][i], out[3][i]) = (np.nanpercentile(S1, q),
+                                                          np.nanpercentile(ST, q))
+    return tuple(out)
+
+
+def sobol_warnings(names, requirements, S1, ST, intervals, n: int) -> list[str]:
+    """Warnings about Sobol indices outside ``[0, 1]``, where no index can be.
+
+    An index above 1 is always reported; a negative one only when its whole confidence
+    interval is below 0 (small negative values of unimportant parameters are the
+    estimator's sampling noise). Each warning names the parameter, requirement, estimate
+    and interval and suggests more samples (the interval shrinks as ``1/sqrt(n)``)."""
+    out = []
+    if S1 is None or ST is None:
+        return out
+    for label, est, lo, hi in (("first-order", S1, intervals["S1_low"], intervals["S1_high"]),
+                               ("total", ST, intervals["ST_low"], intervals["ST_high"])):
+        for j, name in enumerate(names):
+            for a, req in enumerate(requirements):
+                x, l, h = est[j, a], lo[j, a], hi[j, a]
+                if not math.isfinite(x):
+                    continue
+                if x > 1 or (x < 0 and h < 0):
+                    bound = "exceeds 1" if x > 1 else "is negative beyond its interval"
+                    out.append(f"{name}: {label} Sobol index for {req} is {x:+.3f} "
+                               f"(95% interval [{l:+.3f}, {h:+.3f}]), which {bound}; "
+                               f"indices lie in [0, 1], so this is sampling error at "
+                               f"{n} base samples. Use more samples (e.g. {4 * n}, which "
+                               "halves the interval).")
+    return out
+
+
 def _rank(x):
     order = np.argsort(x, kind="stable")
     r = np.empty(len(x))
@@ -165,6 +227,11 @@ class SensitivityResult:
     workers: int
     failed: int = 0
     extra: dict = field(default_factory=dict)
+    #: Bootstrap 95% intervals of the Sobol indices: ``S1_low``, ``S1_high``, ``ST_low``,
+    #: ``ST_high``, each ``(d, n_req)`` (empty without Sobol sampling).
+    intervals: dict = field(default_factory=dict)
+    #: Problems with the statistics (Sobol indices outside [0, 1]), also logged.
+    warnings: list = field(default_factory=list)
 
     @property
     def throughput(self) -> float:
@@ -184,7 +251,8 @@ class SensitivityResult:
                 "spearman": table(self.spearman), "src": table(self.src),
                 "r2": dict(zip(self.requirements, map(float, self.r2))),
                 "sobol_first": table(self.S1), "sobol_total": table(self.ST),
-                "ranking": self.ranking, "best": self.best}
+                "sobol_intervals": {k: table(v) for k, v in self.intervals.items()},
+                "ranking": self.ranking, "best": self.best, "warnings": self.warnings}
 
     def plot_scatter(self, path) -> Path:
         """Scatter matrix: each requirement (rows) against each parameter (columns)."""
@@ -203,7 +271,7 @@ class SensitivityResult:
                     ax.set_ylabel(self.requirements[a], fontsize=8)
         fig.suptitle(f"sensitivity: {self.X.shape[0]} samples ({self.method})")
         path = Path(path)
-        fig.savefig(path, dpi=80)
+        save_figure(fig, path, dpi=80)
         return path
 
     def plot_tornado(self, path) -> Path:
@@ -224,7 +292,7 @@ class SensitivityResult:
             ax.set_xlabel(label, fontsize=8)
             ax.grid(True, axis="x", alpha=0.3)
         path = Path(path)
-        fig.savefig(path, dpi=80)
+        save_figure(fig, path, dpi=80)
         return path
 
 
@@ -294,7 +362,14 @@ def evaluate(problem, names, X, *, workers: int | None = None, address: str | No
     out = np.full((n, len(requirement_names(problem))), np.nan)
     done = 0
     if address:
-        from dask.distributed import Client        # optional dependency
+        try:
+            from dask.distributed import Client    # optional dependency
+        except ImportError as exc:
+            raise ParameterError(f"sensitivity: evaluating on the Dask cluster at "
+                                 f"{address} needs dask.distributed, which cannot be "
+                                 f"imported ({exc}); install it (pip install "
+                                 "\"dask[distributed]\") or give no address to use local "
+                                 "processes.") from None
         with Client(address) as client:
             remote = client.scatter(problem, broadcast=True)
             futures = [client.submit(_evaluate, remote, T[blk]) for blk in blocks]
@@ -330,6 +405,15 @@ def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol"
     ``native`` compiles the step functions to C first when a compiler is present (see
     :mod:`.native`; the results are the same)."""
     names = list(dists)
+    # the statistics regress on the independent samples (A and B for Sobol): they need
+    # more of them than parameters plus one
+    per_sample = 2 if method == "sobol" else 1
+    least = max(2, -(-(len(names) + 2) // per_sample))
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < least:
+        raise ParameterError(f"sensitivity: {n!r} base samples for {len(names)} "
+                             f"parameter(s) with {method} sampling; give at least {least} "
+                             "(the regression needs more samples than parameters), better "
+                             "64 or more.")
     unknown = [nm for nm in names if nm not in problem.names]
     if unknown:
         raise ParameterError(f"sensitivity: {', '.join(unknown)} not among the problem's "
@@ -365,6 +449,7 @@ def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol"
             spear[j, a] = np.corrcoef(_rank(Xs[:, j]), _rank(y))[0, 1]
         src[:, a], r2[a] = standardized_regression(Xs, y)
     S1 = ST = None
+    intervals, warnings = {}, []
     if method == "sobol":
         fA, fB = Y[:n], Y[n:2 * n]
         fAB = Y[2 * n:].reshape(d, n, len(reqs))
@@ -372,8 +457,16 @@ def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol"
             np.all(np.isfinite(fAB), axis=(0, 2))
         S1 = np.zeros((d, len(reqs)))
         ST = np.zeros((d, len(reqs)))
+        intervals = {k: np.full((d, len(reqs)), np.nan)
+                     for k in ("S1_low", "S1_high", "ST_low", "ST_high")}
         for a in range(len(reqs)):
             S1[:, a], ST[:, a] = sobol_indices(fA[keep, a], fB[keep, a], fAB[:, keep, a])
+            bounds = sobol_intervals(fA[keep, a], fB[keep, a], fAB[:, keep, a], seed=seed)
+            for k, v in zip(("S1_low", "S1_high", "ST_low", "ST_high"), bounds):
+                intervals[k][:, a] = v
+        warnings = sobol_warnings(names, reqs, S1, ST, intervals, int(np.sum(keep)))
+        for w in warnings:
+            log.warning(w)
     measure = ST if ST is not None else np.abs(src)
     # rank by the requirements on the measured signals (the total cost repeats them)
     score = np.nanmax(np.abs(measure[:, :-1] if len(reqs) > 1 else measure), axis=1)
@@ -388,7 +481,8 @@ def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol"
                              pearson=pear, spearman=spear, src=src, r2=r2, S1=S1, ST=ST,
                              ranking=ranking, best=best_sets, evaluations=len(X),
                              wall_time=time.perf_counter() - start,
-                             workers=int(used_workers or 0), failed=failed)
+                             workers=int(used_workers or 0), failed=failed,
+                             intervals=intervals, warnings=warnings)
 
 
 def local_sensitivity(problem, names, *, rel_step: float = 1e-3) -> dict:

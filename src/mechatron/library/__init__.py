@@ -1,4 +1,4 @@
-"""The component library, one subpackage per domain (DESIGN.md §3)."""
+"""The component library, one subpackage per domain."""
 
 from mechatron.library import (blocks, electrical, electromechanical, hydraulic, machines,
                                magnetic, mechanisms, multibody, physical_signals, rotational,

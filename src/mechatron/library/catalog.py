@@ -23,6 +23,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mechatron._io import write_text
 import mechatron.core.domains as core_domains
 import mechatron.library as library
 from mechatron.core import Component, Connector, Domain, Input, Output, Parameter
@@ -301,7 +302,7 @@ def write_docs(directory) -> list[Path]:
     written = []
     for s in secs:
         path = out / f"{s.name}.md"
-        path.write_text(section_page(s, known) + "\n", encoding="utf-8")
+        write_text(path, section_page(s, known) + "\n")
         written.append(path)
     total = sum(len(s.components) for s in secs)
     index = ["# Component library by domain", "",
@@ -313,7 +314,7 @@ def write_docs(directory) -> list[Path]:
         d = s.domain
         index.append(f"| [{s.name}]({s.name}.md) | {d.across if d else '-'} | "
                      f"{d.through if d else '-'} | {len(s.components)} |")
-    (out / "README.md").write_text("\n".join(index) + "\n", encoding="utf-8")
+    write_text(out / "README.md", "\n".join(index) + "\n")
     written.append(out / "README.md")
     return written
 

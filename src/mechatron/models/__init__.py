@@ -1,4 +1,4 @@
-"""The database of mechatronic models (DESIGN.md §3).
+"""The database of mechatronic models.
 
 ``list()`` gives every entry; ``get(name)`` one :class:`ModelEntry` with ``build``,
 ``experiment``, ``parameters`` (units, defaults, provenance), ``outputs``, ``variants`` and

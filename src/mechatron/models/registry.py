@@ -47,7 +47,7 @@ def _load() -> None:
             register(entry)
 
 
-def list() -> builtins.list[ModelEntry]:  # noqa: A001  (public name fixed by DESIGN.md)
+def list() -> builtins.list[ModelEntry]:  # noqa: A001  (public name, documented in the README)
     """Every entry of the database, sorted by name."""
     _load()
     return [_REGISTRY[k] for k in sorted(_REGISTRY)]

@@ -13,14 +13,14 @@ def add_commands(sub) -> None:
 
 def add_rtcheck_command(sub) -> None:
     """``mechatron rtcheck NAME --rate HZ [--json]``: real-time readiness of a model."""
-    from mechatron.cli import add_json, add_set
+    from mechatron.cli import MODEL_HELP, add_json, add_set
     p = sub.add_parser("rtcheck", help="check a model for real time at a sample rate",
                        description="Run a variable-step reference, report zero crossings "
                                    "by component, estimate stiffness from the Jacobian's "
                                    "eigenvalues, sweep the fixed-step methods over step "
                                    "sizes and Newton iterations, time the compiled C of "
                                    "each, and recommend a configuration for the rate.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--rate", type=float, required=True, metavar="HZ",
                    help="sample rate of the real-time loop in Hz")
     p.add_argument("--variant", metavar="V", help="variant to build (default: the first)")
@@ -44,11 +44,11 @@ def add_rtcheck_command(sub) -> None:
 def cmd_rtcheck(args) -> int:
     import math
 
-    import mechatron as mt
     from mechatron.cli import CommandError, _parse_sets, emit, emit_json, table
+    from mechatron.models.user import entry_for
     from mechatron.realtime.rtcheck import rtcheck
 
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     params = _parse_sets(args.set, entry)
     variant = args.variant or entry.default_variant
     if not (math.isfinite(args.rate) and args.rate > 0):

@@ -16,6 +16,7 @@ from string import Template
 
 import numpy as np
 
+from mechatron._io import write_text
 import mechatron as mt
 from mechatron.realtime.hil import HILResult
 
@@ -121,5 +122,4 @@ def write_report(res: HILResult, path) -> Path:
              s["dropped_on_purpose"]["controller"]),
             ("samples the controller filled in", s["controller_lost_samples"])]),
         traces_png=traces, timing_png=timing, version=html.escape(mt.__version__))
-    path.write_text(page)
-    return path
+    return write_text(path, page)

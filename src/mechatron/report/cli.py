@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import mechatron as mt
-from mechatron.cli import CommandError, add_json, emit, emit_json
+from mechatron.cli import MODEL_HELP, CommandError, add_json, emit, emit_json
+from mechatron.models.user import entry_for
 
 __all__ = ["add_commands"]
 
@@ -14,7 +14,7 @@ __all__ = ["add_commands"]
 def cmd_diagram(args: argparse.Namespace) -> int:
     from mechatron.report.diagram import FORMATS, write_diagram
     from mechatron.report.html import diagram_variant
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     out = Path(args.out)
     if out.suffix.lower() not in FORMATS:
         raise CommandError(f"--out {out}: use one of {', '.join(FORMATS)}.")
@@ -39,7 +39,7 @@ def cmd_diagram(args: argparse.Namespace) -> int:
 
 def cmd_report(args: argparse.Namespace) -> int:
     from mechatron.report.html import write_report
-    entry = mt.models.get(args.name)
+    entry = entry_for(args.name)
     path = write_report(entry, args.out)
     if args.json:
         emit_json({"model": entry.name, "out": str(path)})
@@ -53,7 +53,7 @@ def add_commands(sub) -> None:
                        description="Draw the network of a database model: its parts with "
                                    "their ports, connections in the colour of their domain, "
                                    "and a legend (Graphviz).")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--out", required=True, metavar="FILE",
                    help="output file: .svg, .png, .pdf, or .dot (no Graphviz needed)")
     p.add_argument("--variant", metavar="V",
@@ -66,7 +66,7 @@ def add_commands(sub) -> None:
                                    "model: description, diagram, parameter table, plots of "
                                    "the default experiment, variants compared, solver "
                                    "profile.")
-    p.add_argument("name", metavar="NAME", help="model name (see `mechatron models`)")
+    p.add_argument("name", metavar="NAME", help=MODEL_HELP)
     p.add_argument("--out", required=True, metavar="FILE.html", help="output file")
     add_json(p)
     p.set_defaults(func=cmd_report)

@@ -18,6 +18,7 @@ import subprocess
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mechatron._io import atomic_path, write_text
 from mechatron.compiler.flatten import flatten
 from mechatron.core.component import Component
 from mechatron.errors import ModelError
@@ -152,14 +153,14 @@ def write_diagram(model: Component, path: str | Path, name: str | None = None) -
                          f"{', '.join(FORMATS)}.")
     source = diagram_dot(model, name)
     if fmt == "dot":
-        path.write_text(source)
-        return path
+        return write_text(path, source)
     dot = shutil.which("dot")
     if dot is None:
         raise FileNotFoundError(DOT_HINT)
-    run = subprocess.run([dot, f"-T{fmt}", "-o", str(path)], input=source.encode(),
-                         capture_output=True, timeout=60)
-    if run.returncode != 0:
-        raise ModelError(f"diagram: Graphviz failed on '{path}': "
-                         f"{run.stderr.decode(errors='replace').strip()}")
+    with atomic_path(path) as tmp:
+        run = subprocess.run([dot, f"-T{fmt}", "-o", str(tmp)], input=source.encode(),
+                             capture_output=True, timeout=60)
+        if run.returncode != 0:
+            raise ModelError(f"diagram: Graphviz failed on '{path}': "
+                             f"{run.stderr.decode(errors='replace').strip()}")
     return path

@@ -15,6 +15,7 @@ from importlib import resources
 from pathlib import Path
 from string import Template
 
+from mechatron._io import write_text
 import mechatron
 from mechatron.models.compare import Comparison, compare_variants, relative
 from mechatron.models.entry import ModelEntry
@@ -164,5 +165,4 @@ def write_report(entry: ModelEntry, path: str | Path) -> Path:
     if not path.parent.exists():
         raise FileNotFoundError(f"report: the folder '{path.parent}' does not exist; "
                                 "create it first.")
-    path.write_text(render_report(entry), encoding="utf-8")
-    return path
+    return write_text(path, render_report(entry))

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mechatron._io import atomic_path, save_figure
 from mechatron.errors import DataError, MechatronError
 
 __all__ = ["animate", "plot_trajectories", "find_mechanism", "Mechanism",
@@ -266,8 +267,9 @@ def _write_gif(frames, path: Path, fps: float) -> None:
     images = [Image.fromarray(f[..., :3]) for f in frames]
     palette = images[0].quantize(colors=64)
     images = [im.quantize(palette=palette) for im in images]
-    images[0].save(path, save_all=True, append_images=images[1:],
-                   duration=max(1, int(round(1000.0 / fps))), loop=0, optimize=False)
+    with atomic_path(path) as tmp:
+        images[0].save(tmp, save_all=True, append_images=images[1:],
+                       duration=max(1, int(round(1000.0 / fps))), loop=0, optimize=False)
 
 
 def _write_mp4(frames, path: Path, fps: float) -> None:
@@ -276,13 +278,14 @@ def _write_mp4(frames, path: Path, fps: float) -> None:
     h, w = frames[0].shape[:2]
     cmd = [shutil.which("ffmpeg") or "ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo",
            "-pix_fmt", "rgba", "-s", f"{w}x{h}", "-r", f"{fps:g}", "-i", "-",
-           "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", str(path)]
-    proc = subprocess.run(cmd, input=b"".join(f.tobytes() for f in frames),
-                          capture_output=True, check=False)
-    if proc.returncode != 0:
-        raise VisualizationError(f"animate: ffmpeg failed to write '{path}': "
-                                 f"{proc.stderr.decode(errors='replace').strip()[-300:]}",
-                                 path=str(path))
+           "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p"]
+    with atomic_path(path) as tmp:
+        proc = subprocess.run(cmd + [str(tmp)], input=b"".join(f.tobytes() for f in frames),
+                              capture_output=True, check=False)
+        if proc.returncode != 0:
+            raise VisualizationError(f"animate: ffmpeg failed to write '{path}': "
+                                     f"{proc.stderr.decode(errors='replace').strip()[-300:]}",
+                                     path=str(path))
 
 
 def plot_trajectories(res, path: str | os.PathLike[str] | None = None):
@@ -336,5 +339,5 @@ def plot_trajectories(res, path: str | os.PathLike[str] | None = None):
     if res.model_name:
         fig.suptitle(res.model_name)
     if path is not None:
-        fig.savefig(path, dpi=100)
+        save_figure(fig, path, dpi=100)
     return fig

@@ -108,7 +108,9 @@ def cross_compile(code: CModel, *, prefix: str = "arm-none-eabi-") -> dict:
     _run([_make(), "--no-print-directory", f"{code.name}_arm.elf",
           f"ARM_CC={prefix}gcc"], code.directory, f"cross-compiling {code.name}")
     elf = code.directory / f"{code.name}_arm.elf"
-    proc = _run([prefix + "size", "-B", str(elf)], code.directory, "arm size")
+    # `size` runs in the code's folder: give it the name there, not a path relative to
+    # the caller's folder (which a relative --out would be)
+    proc = _run([prefix + "size", "-B", elf.name], code.directory, "arm size")
     text, data, bss = (int(v) for v in proc.stdout.strip().splitlines()[-1].split()[:3])
     return {"target": "cortex-m4 (thumb, fpv4-sp-d16 hard float)", "elf": str(elf),
             "text_bytes": text, "data_bytes": data, "bss_bytes": bss,

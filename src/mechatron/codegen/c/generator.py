@@ -1,4 +1,4 @@
-"""Standalone C99 from the fixed-step step function (DESIGN.md §2).
+"""Standalone C99 from the fixed-step step function (docs/realtime.md).
 
 The numerics come from :func:`mechatron.solvers.fixed.make_step`, the very CasADi
 function that the desktop fixed-step run evaluates, emitted by CasADi's code generator;
@@ -19,6 +19,7 @@ import casadi as ca
 import numpy as np
 
 import mechatron
+from mechatron._io import atomic_dir, write_text
 from mechatron.codegen._common import (CodegenError, c_array, c_double, c_identifier,
                                        c_string, render, unique_identifiers)
 from mechatron.compiler.compiled import CompiledModel
@@ -269,12 +270,31 @@ def generate_c(model, out_dir, *, solver: str = "rk4", dt: float, iterations: in
 
 
 def write_c(prep: Prepared, out_dir) -> CModel:
-    """Write the C files of a prepared model."""
+    """Write the C files of a prepared model.
+
+    Nothing is half written: a new folder is built beside ``out_dir`` and renamed when
+    complete; in an existing folder, each file is replaced only by its complete new
+    version (other files of the folder are left alone).
+    """
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise CodegenError(f"--out {out}: exists and is not a directory; give a directory "
                            "for the generated C files.", path=str(out))
-    out.mkdir(parents=True, exist_ok=True)
+    if out.is_dir():
+        files = _write_files(prep, out, out)
+    else:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_dir(out) as tmp:
+            files = _write_files(prep, tmp, out)
+    cm = prep.cm
+    return CModel(name=prep.name, directory=out, files=files, solver=prep.solver,
+                  dt=prep.dt, iterations=prep.iterations, t0=prep.t0, t_stop=prep.t_stop,
+                  parameters=list(cm.param_names), outputs=list(cm.names),
+                  n_states=cm.nx, operations=count_operations(prep.step))
+
+
+def _write_files(prep: Prepared, folder: Path, out: Path) -> dict[str, Path]:
+    """Write the C files into ``folder``; their paths once ``folder`` is ``out``."""
     values = template_values(prep)
     n = prep.name
     texts = {f"{n}.h": render("c/model.h.in", **values),
@@ -283,16 +303,9 @@ def write_c(prep: Prepared, out_dir) -> CModel:
              f"{n}_main.c": render("c/main.c.in", **values),
              f"{n}_arm.c": render("c/arm_main.c.in", **values),
              "Makefile": render("c/Makefile.in", **values)}
-    files = {}
     for fname, text in texts.items():
-        path = out / fname
-        path.write_text(text)
-        files[fname] = path
-    cm = prep.cm
-    return CModel(name=n, directory=out, files=files, solver=prep.solver, dt=prep.dt,
-                  iterations=prep.iterations, t0=prep.t0, t_stop=prep.t_stop,
-                  parameters=list(cm.param_names), outputs=list(cm.names),
-                  n_states=cm.nx, operations=count_operations(prep.step))
+        write_text(folder / fname, text)
+    return {fname: out / fname for fname in texts}
 
 
 _SLOW_OPS = {ca.OP_DIV, ca.OP_SQRT, ca.OP_EXP, ca.OP_LOG, ca.OP_POW, ca.OP_SIN, ca.OP_COS,

@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 import mechatron
+from mechatron._io import atomic_path
 from mechatron.codegen._common import CodegenError, c_array, render
 from mechatron.codegen.c.generator import Prepared, prepare, template_values, write_c
 
@@ -308,7 +309,8 @@ def export_fmu(model, path, *, fmi: int = 2, kind: str = "cs", solver: str = "rk
         _compile(src, sources, library)
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+        with atomic_path(path) as tmp_fmu, \
+                zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:
             for f in sorted(root.rglob("*")):
                 if f.is_file():
                     zf.write(f, f.relative_to(root).as_posix())

@@ -5,7 +5,7 @@ A frame is a point of a body with an orientation. Its across variables are the p
 world's x-axis); its through variables are the force ``(fx, fy)`` and the torque ``tau``
 (about the frame's origin, counter-clockwise positive), all resolved in the world frame.
 
-Sign convention (DESIGN.md §2): the force and torque of a frame are what the connection
+Sign convention (as in every domain, docs/modeling.md): the force and torque of a frame are what the connection
 exerts **on** the component at that frame. Connected frames share position and angle;
 their forces and torques sum to zero (Newton's third law). The power flowing into a
 component through a frame is ``fx*der(x) + fy*der(y) + tau*der(phi)``.
