@@ -17,6 +17,7 @@ from mechatron.core import (Across, Component, Connector, Domain, Input, Output,
 from mechatron.core.events import Clock, sample, when
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers import simulate
+from mechatron.analysis import OperatingPoint, linearize, trim
 from mechatron import errors, library, models  # noqa: E402  (public subpackages)
 
 __version__ = "0.1.0"
@@ -25,4 +26,5 @@ __all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable"
            "Across", "Through", "Input", "Output", "connect", "der", "if_else",
            "Clock", "sample", "when",
            "compile_model", "CompiledModel", "simulate", "SimResult", "SolverStats",
+           "linearize", "trim", "OperatingPoint",
            "library", "models"]

@@ -991,6 +991,7 @@ EXTENSIONS = (
     "mechatron.estimation.cli",
     "mechatron.codegen.cli",
     "mechatron.realtime.cli",
+    "mechatron.analysis.cli",
 )
 
 
@@ -1113,6 +1114,7 @@ duration = _duration
 num = _num
 output_path = _output_path
 new_figure = _new_figure
+parse_sets = _parse_sets
 
 
 # -------------------------------------------------------------------------------- main
