@@ -6,9 +6,11 @@ mechatronic systems.
 """
 
 from mechatron.compiler import CompiledModel, compile_model
-from mechatron.core import (Across, Component, Connector, Domain, Input, Output, Parameter,
-                            Start, System, Through, Variable, connect, der, if_else)
-from mechatron.core.events import Clock, sample, when
+from mechatron.core import (Across, Component, Connector, Discrete, Domain, Input, Output,
+                            Parameter, Start, System, Through, Variable, connect, der,
+                            if_else, logic_and, logic_not, logic_or)
+from mechatron.core.events import (Clock, initial, pre, reinit, sample, steady_state,
+                                   terminal, when)
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers import simulate
 from mechatron import errors, library, models  # noqa: E402  (public subpackages)
@@ -17,6 +19,7 @@ __version__ = "0.1.0"
 
 __all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable", "Start",
            "Across", "Through", "Input", "Output", "connect", "der", "if_else",
-           "Clock", "sample", "when",
+           "Clock", "sample", "when", "Discrete", "pre", "initial", "terminal", "reinit",
+           "steady_state", "logic_and", "logic_or", "logic_not",
            "compile_model", "CompiledModel", "simulate", "SimResult", "SolverStats",
            "library", "models"]

@@ -189,8 +189,13 @@ def _check_chattering(cm: CompiledModel, Xf: np.ndarray, solver: str) -> None:
     """Raise if the transition marked a relation as chattering (see
     :mod:`mechatron.compiler.events`): after its event it was driven straight back onto
     its switching surface, so it would switch again at once, endlessly."""
-    from mechatron.compiler.events import CHATTER_FLAG
+    from mechatron.compiler.events import CHATTER_FLAG, LOOP_FLAG
     nx, nr = cm.nx, cm.nr
+    looping = [k for k in range(nr) if Xf[nx + nr + k] >= 0.75 * LOOP_FLAG]
+    if looping:
+        t_ev = float(Xf[nx + 2 * nr + looping[0]])
+        raise SimulationError(loop_message(cm, looping, f"at t = {t_ev:.9g} s ({solver})"),
+                              path=cm.name, variables=[cm.relations[k][0] for k in looping])
     bad = [k for k in range(nr) if Xf[nx + nr + k] >= 0.5 * CHATTER_FLAG]
     if not bad:
         return
@@ -207,6 +212,18 @@ def _check_chattering(cm: CompiledModel, Xf: np.ndarray, solver: str) -> None:
         f"event {count} the switched dynamics drive the relation straight back across its "
         "switching surface, a sliding mode). Add hysteresis (blocks.Relay), a dead zone, "
         "or smooth the switching law.", path=owners[0] or cm.name, variables=owners)
+
+
+def loop_message(cm: CompiledModel, looping: list[int], where: str) -> str:
+    """The error of an event iteration without a fixed point, naming the conditions."""
+    from mechatron.core.events import MAX_ROUNDS
+    labels = cm.report.get("relation_labels") or [op for _, op in cm.relations]
+    items = [f"'{cm.relations[k][0] or cm.name}': {labels[k]}" for k in looping]
+    return (f"model '{cm.name}': event iteration {where} found no consistent state after "
+            f"{MAX_ROUNDS} rounds; these conditions keep changing: {'; '.join(items[:6])}"
+            f"{' ...' if len(items) > 6 else ''}. Each action makes another condition true "
+            "again (a cycle of when actions, or relations not gated by the mode they "
+            "switch): break the cycle, e.g. with pre() and a mode variable.")
 
 
 def _events(cm: CompiledModel, Xf: np.ndarray) -> dict[str, int]:
