@@ -119,8 +119,8 @@ def prepare_events(flat, alias, relations: list[Relation]) -> EventPlan:
     (relations of when conditions, their memories, initial/terminal, then the clocks)."""
     plan = EventPlan()
     for r in relations:
-        plan.labels[id(r)] = f"{_label(r.d)} {'>' if r.op == '<' else '>='} 0" \
-            if r.op != "sign" else f"sign({_label(r.d)})"
+        plan.labels[id(r)] = r.text or (f"{_label(r.d)} {'>' if r.op == '<' else '>='} 0"
+                                        if r.op != "sign" else f"sign({_label(r.d)})")
     if not flat.events:
         return plan
     ctx = flat.context
@@ -161,7 +161,7 @@ def prepare_events(flat, alias, relations: list[Relation]) -> EventPlan:
         n_before = len(triggers)
         c = _rebuild(c, owner, triggers)
         for r in triggers[n_before:]:
-            plan.labels[id(r)] = f"{_label(r.d)} {'>' if r.op == '<' else '>='} 0"
+            plan.labels[id(r)] = r.text or f"{_label(r.d)} {'>' if r.op == '<' else '>='} 0"
         mem = Relation(ca.SX.sym(f"when{j}[{owner}]"), "mem", 2 * (c != 0) - 1, owner)
         plan.labels[id(mem)] = _label(cond)
         mems.append(mem)
@@ -567,8 +567,9 @@ class Lowering:
         else:
             X_ok = ca.vertcat(xf, modes_f, cnt_out, te_out)
         # no fixed point: keep the state before the event and mark what kept changing
-        X_loop = ca.vertcat(x, modes, counters + LOOP_FLAG * lastchg,
-                            tlast + lastchg * (t - tlast))
+        first = lastchg * (counters < 0.75 * LOOP_FLAG)     # the first loop is reported
+        X_loop = ca.vertcat(x, modes, counters + LOOP_FLAG * first,
+                            tlast + first * (t - tlast))
         return ca.if_else(looping, X_loop, X_ok)
 
     def transition(self, f_dist, index, t, x, modes, counters, tlast, z, p):

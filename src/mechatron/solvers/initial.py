@@ -172,6 +172,6 @@ def _check_loop(cm: CompiledModel, X: np.ndarray, where: str) -> None:
     nx, nr = cm.nx, cm.nr
     bad = [k for k in range(nr) if X[nx + nr + k] >= 0.75 * LOOP_FLAG]
     if bad:
-        from mechatron.solvers.simulate import loop_message
+        from mechatron.solvers.hybrid import loop_message
         raise InitializationError(loop_message(cm, bad, where), path=cm.name,
                                   variables=[cm.relations[k][0] for k in bad])

@@ -216,7 +216,10 @@ static void mt_hermite(const double *x0, const double *f0, const double *x1,
     double a0 = 2 * th3 - 3 * th2 + 1, b0 = (th3 - 2 * th2 + th) * h;
     double a1 = -2 * th3 + 3 * th2, b1 = (th3 - th2) * h;
     int i;
-    for (i = 0; i < n; ++i) out[i] = a0 * x0[i] + b0 * f0[i] + a1 * x1[i] + b1 * f1[i];
+    (void)a0;
+    /* x0 + a1 (x1 - x0): a state that does not move between the steps (a discrete
+     * state, der = 0) is reproduced exactly, not up to rounding of a0 + a1 = 1 */
+    for (i = 0; i < n; ++i) out[i] = x0[i] + a1 * (x1[i] - x0[i]) + b0 * f0[i] + b1 * f1[i];
 }
 
 /* Integrate; see the top of the file.  x0 holds the whole integration state

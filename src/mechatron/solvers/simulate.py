@@ -12,6 +12,7 @@ from mechatron.core.component import Component
 from mechatron.errors import SimulationError
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.fixed import METHODS, integrate_fixed
+from mechatron.solvers.hybrid import terminal_event
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
 from mechatron.solvers.logging import evaluate_outputs
@@ -132,6 +133,9 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                             rhs_evals=int(st.get("n_rhs", st.get("nfevals", 0))),
                             jac_evals=int(st.get("n_jac", st.get("n_call_jacF", 0))))
     _check_chattering(cm, Xf, stats.solver)
+    if cm.report.get("terminal_relations"):     # when(terminal()) acts at the last point
+        Xf, Y[:, -1] = terminal_event(cm, float(t[-1]), Xf, z0, p)
+        _check_chattering(cm, Xf, stats.solver)
     stats.events = _events(cm, Xf)
     stats.wall_time = _time.perf_counter() - clock
     stats.compile_time = compile_time
@@ -194,6 +198,7 @@ def _check_chattering(cm: CompiledModel, Xf: np.ndarray, solver: str) -> None:
     looping = [k for k in range(nr) if Xf[nx + nr + k] >= 0.75 * LOOP_FLAG]
     if looping:
         t_ev = float(Xf[nx + 2 * nr + looping[0]])
+        from mechatron.solvers.hybrid import loop_message
         raise SimulationError(loop_message(cm, looping, f"at t = {t_ev:.9g} s ({solver})"),
                               path=cm.name, variables=[cm.relations[k][0] for k in looping])
     bad = [k for k in range(nr) if Xf[nx + nr + k] >= 0.5 * CHATTER_FLAG]
@@ -212,18 +217,6 @@ def _check_chattering(cm: CompiledModel, Xf: np.ndarray, solver: str) -> None:
         f"event {count} the switched dynamics drive the relation straight back across its "
         "switching surface, a sliding mode). Add hysteresis (blocks.Relay), a dead zone, "
         "or smooth the switching law.", path=owners[0] or cm.name, variables=owners)
-
-
-def loop_message(cm: CompiledModel, looping: list[int], where: str) -> str:
-    """The error of an event iteration without a fixed point, naming the conditions."""
-    from mechatron.core.events import MAX_ROUNDS
-    labels = cm.report.get("relation_labels") or [op for _, op in cm.relations]
-    items = [f"'{cm.relations[k][0] or cm.name}': {labels[k]}" for k in looping]
-    return (f"model '{cm.name}': event iteration {where} found no consistent state after "
-            f"{MAX_ROUNDS} rounds; these conditions keep changing: {'; '.join(items[:6])}"
-            f"{' ...' if len(items) > 6 else ''}. Each action makes another condition true "
-            "again (a cycle of when actions, or relations not gated by the mode they "
-            "switch): break the cycle, e.g. with pre() and a mode variable.")
 
 
 def _events(cm: CompiledModel, Xf: np.ndarray) -> dict[str, int]:
