@@ -485,3 +485,50 @@ def test_conflicting_initial_equation_and_start_value_are_named():
                        match=r"Conflicting targets: .*(x = 1 \(high\).*initial equation|"
                              r"initial equation 'Lag: der\(x\) == 0'.*x = 1 \(high\))"):
         mt.simulate(Lag(x=1.0), 1.0)
+
+
+# -- a user-written Coulomb clutch whose break-away test is not gated by its stuck mode --
+
+F_C, J_C = 1.0, 0.01
+
+
+class Clutch(mt.Component):
+    """An inertia under ``tau = 2 sin(2 pi t)`` with Coulomb friction ``F``, its modes
+    written by hand: sliding forward (w > 0), backward (w < 0), else stuck, where the
+    break-away test ``|tau| > F`` is not gated by the stuck mode. At t = 0 re-reading all
+    modes at once cycles between the two sliding modes (each points into the other);
+    re-reading them one after the other finds the stuck mode."""
+
+    w = mt.Variable("rad/s", start=0.0, doc="Speed")
+    f = mt.Variable("N*m", doc="Friction torque")
+
+    def equations(self):
+        tau = 2.0 * ca.sin(2 * np.pi * self.time)
+        brk = ca.fabs(tau) > F_C
+        return [J_C * mt.der(self.w) == tau - self.f,
+                self.f == ca.if_else(self.w > 0, F_C, ca.if_else(
+                    self.w < 0, -F_C, ca.if_else(brk, F_C * ca.sign(tau), tau)))]
+
+
+def clutch_speed_at_1s():
+    """Stuck until tau = F at t = 1/12; slides forward until w = 0 again (t2, where
+    tau < -F already); then slides backward: w(1) = int_t2^1 (tau + F) dt / J."""
+    from scipy.optimize import brentq
+
+    def tau_integral(a, b):
+        return -(np.cos(2 * np.pi * b) - np.cos(2 * np.pi * a)) / np.pi
+
+    t1 = 1 / 12
+    w_fwd = lambda t: (tau_integral(t1, t) - F_C * (t - t1)) / J_C     # noqa: E731
+    t2 = brentq(w_fwd, 0.5, 0.9)
+    assert 2 * np.sin(2 * np.pi * t2) < -F_C
+    return (tau_integral(t2, 1.0) + F_C * (1.0 - t2)) / J_C
+
+
+@pytest.mark.parametrize("solver", VARIABLE)
+def test_clutch_with_ungated_break_away_slides_and_sticks_analytically(solver):
+    res = mt.simulate(Clutch(), 1.0, solver=solver, rtol=1e-10, atol=1e-12,
+                      t_out=np.linspace(0, 1, 101))
+    stuck = res.t < 1 / 12 - 1e-9
+    assert np.all(res["w"][stuck] == 0.0)
+    assert res.final("w") == pytest.approx(clutch_speed_at_1s(), rel=1e-6)

@@ -21,7 +21,7 @@ from mechatron.units import to_si
 __all__ = ["CompiledModel"]
 
 _FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition", "f_scales",
-          "f_events", "f_init")
+          "f_events", "f_init", "f_dist2")
 
 
 @dataclass
@@ -75,6 +75,9 @@ class CompiledModel:
     #: Residuals of the initial equations (``initial_equations()``), or None: they hold
     #: at ``t0`` beside the start values of high priority (see solvers.initial).
     f_init: ca.Function = None
+    #: ``(d, d_dot, d_ddot)`` of the relations: distances and their first two time
+    #: derivatives along the trajectory (modes of relations at rest on their surface).
+    f_dist2: ca.Function = None
     param_bounds: list = field(default_factory=list)   # (min or None, max or None)
     #: External inputs (signal inputs of the root component) by instance path: each is a
     #: slot ``input_index[k]`` of ``p`` that ``simulate(inputs=...)`` fills with a signal
@@ -172,6 +175,7 @@ class CompiledModel:
                     "input_defaults"):   # files saved before external inputs existed
             state.setdefault(key, [])
         state.setdefault("f_init", None)
+        state.setdefault("f_dist2", None)
         for key in _FUNCS:
             if state.get(key) is not None:
                 state[key] = ca.Function.deserialize(state[key])

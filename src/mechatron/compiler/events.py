@@ -345,7 +345,7 @@ def _apply(plan, order, targets, kinds, x_syms, shadow, x, fire, gidx, bind):
 NEAR_TIME = 1e-11   # s: a distance this close to zero (in time to cross) is on the boundary
 
 
-def _rule(d, d_dot, ops, d_ref):
+def _rule(d, d_dot, ops, d_ref, d_ddot=None):
     """Mode from a distance; on the boundary the direction decides, at rest the op.
 
     "On the boundary" includes a distance that is tiny (at most 1e-9 of its size before
@@ -359,6 +359,8 @@ def _rule(d, d_dot, ops, d_ref):
     out = []
     for k, op in enumerate(ops):
         at_rest = 1.0 if op != "<" else -1.0
+        if d_ddot is not None:     # at rest to first order: where it goes next
+            at_rest = ca.if_else(d_ddot[k] > 0, 1, ca.if_else(d_ddot[k] < 0, -1, at_rest))
         near = ca.logic_and(ca.fabs(d[k]) <= NEAR_TIME * ca.fabs(d_dot[k]),
                             ca.fabs(d[k]) <= 1e-9 * ca.fmax(1.0, ca.fabs(d_ref[k])))
         out.append(ca.if_else(ca.logic_and(near, d_dot[k] != 0), ca.sign(d_dot[k]),
@@ -428,12 +430,19 @@ class Lowering:
         self._chain_fn = None
 
     # -- one round ----------------------------------------------------------------------
-    def _round(self, f_dist, nz: int, npar: int) -> ca.Function:
+    def _round(self, f_dist, nz: int, npar: int, sweep: bool = False) -> ca.Function:
+        """One round of the event iteration, ``(C, K) -> (C', changed)`` with the carried
+        ``C = [X; modes changed in the last round; modes at the start of the last two
+        rounds]`` and the constants ``K`` of the event. ``sweep``: the ordinary relations
+        are re-read one after the other, each seeing the modes already re-read (used when
+        re-reading them all at once has fallen into a cycle of period two, as two sliding
+        modes that each point into the other)."""
         nx, nr = self.nx, self.nr
         nX = nx + 3 * nr
-        C = ca.SX.sym("C", nX + nr)
+        C = ca.SX.sym("C", nX + 3 * nr)
         K = ca.SX.sym("K", 1 + nz + npar + nX + 3 * nr + 1)
         Xc = C[:nX]
+        p1 = C[nX + nr:nX + 2 * nr]
         t = K[0]
         z = K[1:1 + nz] if nz else ca.SX(0, 1)
         p = K[1 + nz:1 + nz + npar] if npar else ca.SX(0, 1)
@@ -445,26 +454,35 @@ class Lowering:
         x = Xc[:nx] if nx else ca.SX(0, 1)
         modes, cnt, te = Xc[nx:nx + nr], Xc[nx + nr:nx + 2 * nr], Xc[nx + 2 * nr:]
         cnt_pre = Xpre[nx + nr:nx + 2 * nr]
-        d, ddot = f_dist(t, Xc, z, p)
-        direction = _rule(d, ddot, self.ops, dref)
-        new = []
-        for k, op in enumerate(self.ops):
-            if not self.is_ordinary[k]:
-                new.append(modes[k])
-                continue
-            le = 1.0 if op in ("<=", "sign") else 0.0
+        d, ddot, d2 = f_dist(t, Xc, z, p)
+
+        def reread(k, d, ddot, d2):
+            le = 1.0 if self.ops[k] in ("<=", "sign") else 0.0
             by_sign = ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, 2 * le - 1))
-            rule = ca.if_else(fixed, by_sign, direction[k])
-            heading = ca.if_else(ddot[k] > 0, 1, ca.if_else(ddot[k] < 0, -1, modes[k]))
+            rule = ca.if_else(fixed, by_sign, _rule(d, ddot, self.ops, dref, d2)[k])
+            heading = ca.if_else(ddot[k] > 0, 1, ca.if_else(ddot[k] < 0, -1, ca.if_else(
+                d2[k] > 0, 1, ca.if_else(d2[k] < 0, -1, modes[k]))))
             # the relation that crossed keeps its flipped mode while its distance is
             # unchanged; a when trigger takes the direction it now moves in (a ball
             # that bounced leaves h <= 0 at once, without another event)
             keep = heading if self.is_trigger[k] else modes[k]
             sel_mode = ca.if_else(d[k] == d0[k], keep, rule)
-            new.append(ca.if_else(sel[k], sel_mode, rule))
+            return ca.if_else(sel[k], sel_mode, rule)
+
+        new = list(ca.vertsplit(modes))
+        if sweep:
+            dist = self._dist_call(f_dist)
+            for k in range(nr):
+                if self.is_ordinary[k]:
+                    dk, ddk, d2k = dist(t, ca.vertcat(x, *new, cnt, te), z, p)
+                    new[k] = reread(k, dk, ddk, d2k)
+        else:
+            for k in range(nr):
+                if self.is_ordinary[k]:
+                    new[k] = reread(k, d, ddot, d2)
         new = ca.vertcat(*new)
         Xm = ca.vertcat(x, new, cnt, te)
-        dm, _ = f_dist(t, Xm, z, p)
+        dm = f_dist(t, Xm, z, p)[0]
         # clocks due (the event's own clock until it has advanced in this event)
         periods = self._periods(p)
         due = [ca.SX(0)] * nr
@@ -509,8 +527,29 @@ class Lowering:
         lastchg = modes_out != modes
         changed = ca.logic_or(_any(lastchg), ca.logic_or(_any(fire),
                                                          _any(cnt_out != cnt)))
-        C_new = ca.vertcat(x_post, modes_out, cnt_out, te, lastchg)
-        return ca.Function("event_round", [C, K], [C_new, changed])
+        C_new = ca.vertcat(x_post, modes_out, cnt_out, te, lastchg, modes, p1)
+        return ca.Function("event_sweep" if sweep else "event_round", [C, K],
+                           [C_new, changed])
+
+    def _dist_call(self, f_dist) -> ca.Function:
+        """``f_dist`` as a call (not inlined): a sweep evaluates it once per relation."""
+        args = [ca.SX.sym(f_dist.name_in(i), f_dist.sparsity_in(i))
+                for i in range(f_dist.n_in())]
+        return ca.Function("dist_call", args, f_dist(*args), {"never_inline": True})
+
+    def _dispatch(self, f_dist, nz, npar) -> ca.Function:
+        """A round, or a sweep when the modes are back where they were two rounds ago."""
+        jacobi = self._round(f_dist, nz, npar)
+        sweep = self._round(f_dist, nz, npar, sweep=True)
+        nX, nr = self.nx + 3 * self.nr, self.nr
+        C = ca.MX.sym("C", jacobi.size1_in(0))
+        K = ca.MX.sym("K", jacobi.size1_in(1))
+        modes = C[self.nx:self.nx + nr]
+        lastchg, p2 = C[nX:nX + nr], C[nX + 2 * nr:nX + 3 * nr]
+        cycling = ca.logic_and(ca.sum1(lastchg) > 0, ca.sum1(modes != p2) == 0)
+        switch = ca.Function.conditional("event_round_or_sweep", [jacobi], sweep)
+        Co, ch = switch(cycling, C, K)
+        return ca.Function("event_round_dispatch", [C, K], [Co, ch])
 
     def _periods(self, p):
         out = [ca.SX(0)] * self.nr
@@ -530,7 +569,7 @@ class Lowering:
 
     def _iterate(self, f_dist, nz, npar) -> ca.Function:
         if self._chain_fn is None:
-            inner = _chain(self._round(f_dist, nz, npar), CHAIN, "event_rounds")
+            inner = _chain(self._dispatch(f_dist, nz, npar), CHAIN, "event_rounds")
             outer = _chain(inner, MAX_ROUNDS // CHAIN, "event_iteration")
             C = ca.MX.sym("C", outer.size1_in(0))
             K = ca.MX.sym("K", outer.size1_in(1))
@@ -545,16 +584,16 @@ class Lowering:
         ordinary = ca.DM([1.0 if o else 0.0 for o in self.is_ordinary])
         flipped = modes * (1 - 2 * sel * ordinary)
         X1 = ca.vertcat(x, flipped, counters, tlast)
-        d0, _ = f_dist(t, X1, z, p)
-        dref, _ = f_dist(t, X, z, p)
+        d0 = f_dist(t, X1, z, p)[0]
+        dref = f_dist(t, X, z, p)[0]
         K = ca.vertcat(t, z, p, X, sel, d0, dref, fixed)
         it = self._iterate(f_dist, z.numel(), p.numel())
-        Cf, looping = it(ca.vertcat(X1, ca.DM.zeros(nr)), K)
+        Cf, looping = it(ca.vertcat(X1, ca.DM.zeros(3 * nr)), K)
         xf = Cf[:nx] if nx else ca.SX(0, 1)
         modes_f = Cf[nx:nx + nr]
         cnt_f = Cf[nx + nr:nx + 2 * nr]
         te_f = Cf[nx + 2 * nr:nx + 3 * nr]
-        lastchg = Cf[nx + 3 * nr:]
+        lastchg = Cf[nx + 3 * nr:nx + 4 * nr]
         initial = ca.DM([1.0 if op == "initial" else 0.0 for op in self.ops])
         modes_f = initial + (1 - initial) * modes_f          # initial() is over
         counted = ordinary * ca.logic_or(sel, modes_f != modes)
@@ -595,8 +634,8 @@ class Lowering:
         plain = ca.DM([1.0 if o and not w else 0.0 for o, w in
                        zip(self.is_ordinary, self.is_trigger)])
         rapid = ca.logic_and(counters_pre > 0, t - tlast_pre < CHATTER_TIME)
-        _, ddot_pre = f_dist(t, X_pre, z, p)
-        d, ddot = f_dist(t, ca.vertcat(x, modes, counters, tlast), z, p)
+        ddot_pre = f_dist(t, X_pre, z, p)[1]
+        d, ddot = f_dist(t, ca.vertcat(x, modes, counters, tlast), z, p)[:2]
         modes_pre = X_pre[x.numel():x.numel() + len(self.ops)]
         before = modes_pre * ddot_pre < 0
         after = ca.logic_and(modes * ddot < 0, modes * d <= -CHATTER_TIME * modes * ddot)

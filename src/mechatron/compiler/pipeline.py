@@ -147,6 +147,10 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     # is exactly zero (a pulse starting at t = 0 rises; it is not "off")
     ddot = ca.jacobian(dvec, t) + ca.jtimes(dvec, X, xdot) if nr else ca.SX(0, 1)
     f_dist = ca.Function("dist", args, [dvec, ddot], argn, ["d", "d_dot"])
+    # and the second derivative, for a relation at rest on its surface to first order (a
+    # clutch at the instant its torque reaches break-away: it slides off at once)
+    d2dot = ca.jacobian(ddot, t) + ca.jtimes(ddot, X, xdot) if nr else ca.SX(0, 1)
+    f_dist2 = ca.Function("dist2", args, [dvec, ddot, d2dot], argn, ["d", "d_dot", "d_ddot"])
     # + 1e-300: an indicator exactly 0 at the end of a step (an edge falling on an output
     # time) would be followed by a negative value without a sign change the solver sees
     f_zero = ca.Function("zero", args, [modes * dvec + 1e-300 if nr else ca.SX(0, 1)],
@@ -154,12 +158,12 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     index = ca.SX.sym("index")
     events = EventLowering(plan, relations, flat, alias, list(low.states),
                            list(low.state_syms), flat.name, p=p, shadow=shadow, t=t, z=z)
-    post = events.transition(f_dist, index, t, x, modes, counters, tlast, z, p) if nr \
+    post = events.transition(f_dist2, index, t, x, modes, counters, tlast, z, p) if nr \
         else X
     f_transition = ca.Function("transition", [index, t, X, z, p], [post, z],
                                ca.event_in()[:5], ["post_x", "post_z"])
     f_events = ca.Function("events", args, [events.step_events(
-        f_dist, t, x, modes, counters, tlast, z, p) if nr else X], argn, ["post_x"])
+        f_dist2, t, x, modes, counters, tlast, z, p) if nr else X], argn, ["post_x"])
     f_init = _initial_function(flat, ini, args, argn, ca.vertcat(*low.state_syms, z, p, t)
                                if n_ini else None)
     scales = ca.vertcat(*flat.time_scales) if flat.time_scales else ca.SX(0, 1)
@@ -212,7 +216,7 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
         relations=[(r.owner, r.op) for r in relations],
         x_start=np.array(state_starts, dtype=float), x_priority=state_prior,
         z_start=z_start, targets=targets, f_ode=f_ode, f_alg=f_alg, f_out=f_out,
-        f_zero=f_zero, f_dist=f_dist, f_transition=f_transition, f_scales=f_scales,
+        f_zero=f_zero, f_dist=f_dist, f_dist2=f_dist2, f_transition=f_transition, f_scales=f_scales,
         f_events=f_events, f_init=f_init,
         param_bounds=[q.bounds for q in params], report=report,
         input_names=[q.name for q in params if q.is_input],

@@ -30,15 +30,30 @@ def initial_modes(cm: CompiledModel, t0: float, x: np.ndarray, z: np.ndarray,
     modes = np.ones(nr)
     le = np.array([op in ("<=", "sign") for _, op in cm.relations])
     counters = np.zeros(nr) if counters is None else counters
-    for _ in range(MAX_ROUNDS):
+    f = cm.f_dist2 if cm.f_dist2 is not None else cm.f_dist
+
+    def read(modes):
         X = np.concatenate([x, modes, counters, np.full(nr, t0)])
-        d, d_dot = (np.array(v, dtype=float).ravel() for v in cm.f_dist(t0, X, z, p))
-        # on the boundary, the direction of motion decides; at rest, the relation's op
-        at_zero = np.where(d_dot > 0, True, np.where(d_dot < 0, False, le))
-        new = np.where((d > 0) | ((d == 0) & at_zero), 1.0, -1.0)
+        d, d_dot, *more = (np.array(v, dtype=float).ravel() for v in f(t0, X, z, p))
+        # on the boundary, the direction of motion decides (to second order); at rest,
+        # the relation's op
+        rest = le if not more else np.where(more[0] > 0, True, np.where(more[0] < 0,
+                                                                         False, le))
+        at_zero = np.where(d_dot > 0, True, np.where(d_dot < 0, False, rest))
+        return np.where((d > 0) | ((d == 0) & at_zero), 1.0, -1.0)
+
+    before = None
+    for _ in range(MAX_ROUNDS):
+        new = read(modes)
+        if before is not None and np.array_equal(new, before):
+            # a cycle of period two (two sliding modes pointing into each other): re-read
+            # one relation at a time, each seeing the ones already re-read
+            new = modes.copy()
+            for k in range(nr):
+                new[k] = read(new)[k]
         if np.array_equal(new, modes):
             return modes
-        last, modes = new != modes, new
+        last, before, modes = new != modes, modes, new
     labels = cm.report.get("relation_labels") or [op for _, op in cm.relations]
     bad = [f"{cm.relations[k][0] or cm.name}: {labels[k]}" for k in np.nonzero(last)[0]]
     raise InitializationError(
