@@ -356,17 +356,21 @@ def _rule(d, d_dot, ops, d_ref, d_ddot=None):
     that residual, tells its mode. A distance that is large (a diode still off after its
     switch opened: huge and moving fast) keeps its sign.
     """
-    out = []
-    for k, op in enumerate(ops):
+    return ca.vertcat(*[_rule_one(d, d_dot, ops, d_ref, d_ddot, k)
+                        for k in range(len(ops))])
+
+
+def _rule_one(d, d_dot, ops, d_ref, d_ddot, k):
+    """:func:`_rule` of relation ``k`` alone."""
+    for op in (ops[k],):
         at_rest = 1.0 if op != "<" else -1.0
         if d_ddot is not None:     # at rest to first order: where it goes next
             at_rest = ca.if_else(d_ddot[k] > 0, 1, ca.if_else(d_ddot[k] < 0, -1, at_rest))
         near = ca.logic_and(ca.fabs(d[k]) <= NEAR_TIME * ca.fabs(d_dot[k]),
                             ca.fabs(d[k]) <= 1e-9 * ca.fmax(1.0, ca.fabs(d_ref[k])))
-        out.append(ca.if_else(ca.logic_and(near, d_dot[k] != 0), ca.sign(d_dot[k]),
-                   ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, ca.if_else(
-                       d_dot[k] > 0, 1, ca.if_else(d_dot[k] < 0, -1, at_rest))))))
-    return ca.vertcat(*out)
+        return ca.if_else(ca.logic_and(near, d_dot[k] != 0), ca.sign(d_dot[k]),
+                          ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, ca.if_else(
+                              d_dot[k] > 0, 1, ca.if_else(d_dot[k] < 0, -1, at_rest)))))
 
 
 def clock_distances(plan: EventPlan, relations, t, counters, p_syms=None):
@@ -459,7 +463,7 @@ class Lowering:
         def reread(k, d, ddot, d2):
             le = 1.0 if self.ops[k] in ("<=", "sign") else 0.0
             by_sign = ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, 2 * le - 1))
-            rule = ca.if_else(fixed, by_sign, _rule(d, ddot, self.ops, dref, d2)[k])
+            rule = ca.if_else(fixed, by_sign, _rule_one(d, ddot, self.ops, dref, d2, k))
             heading = ca.if_else(ddot[k] > 0, 1, ca.if_else(ddot[k] < 0, -1, ca.if_else(
                 d2[k] > 0, 1, ca.if_else(d2[k] < 0, -1, modes[k]))))
             # the relation that crossed keeps its flipped mode while its distance is
