@@ -387,19 +387,25 @@ def _any(v) -> ca.SX:
     return ca.sum1(v) > 0 if v.numel() else ca.SX(0)
 
 
-def _chain(f: ca.Function, n: int, name: str) -> ca.Function:
-    """``f(C, K) -> (C', changed)`` repeated up to ``n`` times, stopping after the first
-    call that reports no change; returns the same signature (``changed`` of the last)."""
-    C = ca.MX.sym("C", f.size1_in(0))
+def _unless_done(f: ca.Function, name: str) -> ca.Function:
+    """``(Cg, K) -> Cg'`` with ``Cg = [C; go]``: ``f`` applied while ``go`` is 1 (a
+    conditional call: once an iteration has settled the rest are copies)."""
+    Cg = ca.MX.sym("C", f.size1_in(0))
     K = ca.MX.sym("K", f.size1_in(1))
-    level = f
-    for k in range(1, n):
-        Cn, ch = f(C, K)
-        stop = ca.Function(f"{name}_done{k}", [C, K], [C, ca.MX(0)])
-        switch = ca.Function.conditional(f"{name}_if{k}", [stop], level)
-        Co, cho = switch(ch, Cn, K)
-        level = ca.Function(f"{name}_{k}", [C, K], [Co, cho])
-    return level
+    skip = ca.Function(f"{name}_done", [Cg, K], [Cg])
+    switch = ca.Function.conditional(f"{name}_if", [skip], f)
+    return ca.Function(name, [Cg, K], [switch(Cg[Cg.numel() - 1], Cg, K)])
+
+
+def _repeat(f: ca.Function, n: int, name: str) -> ca.Function:
+    """``f`` applied ``n`` times in sequence (one flat function: its work is reused, so
+    generated C for a microcontroller stays small)."""
+    Cg = ca.MX.sym("C", f.size1_in(0))
+    K = ca.MX.sym("K", f.size1_in(1))
+    out = Cg
+    for _ in range(n):
+        out = f(out, K)
+    return ca.Function(name, [Cg, K], [out])
 
 
 class Lowering:
@@ -435,29 +441,26 @@ class Lowering:
 
     # -- one round ----------------------------------------------------------------------
     def _round(self, f_dist, nz: int, npar: int, sweep: bool = False) -> ca.Function:
-        """One round of the event iteration, ``(C, K) -> (C', changed)`` with the carried
-        ``C = [X; modes changed in the last round; modes at the start of the last two
-        rounds]`` and the constants ``K`` of the event. ``sweep``: the ordinary relations
-        are re-read one after the other, each seeing the modes already re-read (used when
-        re-reading them all at once has fallen into a cycle of period two, as two sliding
-        modes that each point into the other)."""
+        """One round of the event iteration, ``(C, K) -> C'``, with the carried
+        ``C = [x; modes; counters; modes at the start of the last two rounds; go]`` (``go``
+        of the result: the round changed something) and the constants ``K = [t; z; p;
+        event times; counters before the event; selected relation; distances at the event
+        and before it; fixed-step flag]``. ``sweep``: the ordinary relations are re-read
+        one after the other, each seeing the modes already re-read (used when re-reading
+        them all at once has fallen into a cycle of period two, as two sliding modes that
+        each point into the other)."""
         nx, nr = self.nx, self.nr
-        nX = nx + 3 * nr
-        C = ca.SX.sym("C", nX + 3 * nr)
-        K = ca.SX.sym("K", 1 + nz + npar + nX + 3 * nr + 1)
-        Xc = C[:nX]
-        p1 = C[nX + nr:nX + 2 * nr]
+        C = ca.SX.sym("C", nx + 4 * nr + 1)
+        K = ca.SX.sym("K", 1 + nz + npar + 5 * nr + 1)
         t = K[0]
         z = K[1:1 + nz] if nz else ca.SX(0, 1)
         p = K[1 + nz:1 + nz + npar] if npar else ca.SX(0, 1)
         o = 1 + nz + npar
-        Xpre = K[o:o + nX]
-        sel, d0, dref = K[o + nX:o + nX + nr], K[o + nX + nr:o + nX + 2 * nr], \
-            K[o + nX + 2 * nr:o + nX + 3 * nr]
-        fixed = K[o + nX + 3 * nr]
-        x = Xc[:nx] if nx else ca.SX(0, 1)
-        modes, cnt, te = Xc[nx:nx + nr], Xc[nx + nr:nx + 2 * nr], Xc[nx + 2 * nr:]
-        cnt_pre = Xpre[nx + nr:nx + 2 * nr]
+        te, cnt_pre, sel, d0, dref = (K[o + k * nr:o + (k + 1) * nr] for k in range(5))
+        fixed = K[o + 5 * nr]
+        x = C[:nx] if nx else ca.SX(0, 1)
+        modes, cnt, p1 = C[nx:nx + nr], C[nx + nr:nx + 2 * nr], C[nx + 2 * nr:nx + 3 * nr]
+        Xc = ca.vertcat(x, modes, cnt, te)
         d, ddot, d2 = f_dist(t, Xc, z, p)
 
         def reread(k, d, ddot, d2):
@@ -531,9 +534,8 @@ class Lowering:
         lastchg = modes_out != modes
         changed = ca.logic_or(_any(lastchg), ca.logic_or(_any(fire),
                                                          _any(cnt_out != cnt)))
-        C_new = ca.vertcat(x_post, modes_out, cnt_out, te, lastchg, modes, p1)
-        return ca.Function("event_sweep" if sweep else "event_round", [C, K],
-                           [C_new, changed])
+        C_new = ca.vertcat(x_post, modes_out, cnt_out, modes, p1, changed)
+        return ca.Function("event_sweep" if sweep else "event_round", [C, K], [C_new])
 
     def _dist_call(self, f_dist) -> ca.Function:
         """``f_dist`` as a call (not inlined): a sweep evaluates it once per relation."""
@@ -541,43 +543,49 @@ class Lowering:
                 for i in range(f_dist.n_in())]
         return ca.Function("dist_call", args, f_dist(*args), {"never_inline": True})
 
-    def _dispatch(self, f_dist, nz, npar) -> ca.Function:
-        """A round, or a sweep when the modes are back where they were two rounds ago."""
-        jacobi = self._round(f_dist, nz, npar)
-        sweep = self._round(f_dist, nz, npar, sweep=True)
-        nX, nr = self.nx + 3 * self.nr, self.nr
-        C = ca.MX.sym("C", jacobi.size1_in(0))
-        K = ca.MX.sym("K", jacobi.size1_in(1))
-        modes = C[self.nx:self.nx + nr]
-        lastchg, p2 = C[nX:nX + nr], C[nX + 2 * nr:nX + 3 * nr]
-        cycling = ca.logic_and(ca.sum1(lastchg) > 0, ca.sum1(modes != p2) == 0)
-        switch = ca.Function.conditional("event_round_or_sweep", [jacobi], sweep)
-        Co, ch = switch(cycling, C, K)
-        return ca.Function("event_round_dispatch", [C, K], [Co, ch])
-
     def _periods(self, p):
-        out = [ca.SX(0)] * self.nr
-        for k, r in enumerate(self.relations):
-            if id(r) in self.plan.clocks:
-                out[k] = ca.substitute(self.plan.clocks[id(r)][0], self.p, p) \
-                    if self.p.numel() else self.plan.clocks[id(r)][0]
-        return out
+        return self._clock_part(p, 0)
 
     def _offsets(self, p):
+        return self._clock_part(p, 1)
+
+    def _clock_part(self, p, which: int):
         out = [ca.SX(0)] * self.nr
         for k, r in enumerate(self.relations):
             if id(r) in self.plan.clocks:
-                out[k] = ca.substitute(self.plan.clocks[id(r)][1], self.p, p) \
-                    if self.p.numel() else self.plan.clocks[id(r)][1]
+                expr = self.plan.clocks[id(r)][which]
+                out[k] = ca.substitute(expr, self.p, p) if self.p.numel() else expr
         return out
 
     def _iterate(self, f_dist, nz, npar) -> ca.Function:
+        """``(C, K) -> C'``: rounds until one changes nothing (``go`` of the result 0),
+        at most MAX_ROUNDS (``go`` 1: the iteration did not settle). Ten rounds form one
+        flat function of conditional calls (a round, a sweep when the modes are back where
+        they were two rounds ago, or a copy once settled), ten of those the iteration: two
+        levels of calls, so the work memory stays small (generated C for a
+        microcontroller)."""
         if self._chain_fn is None:
-            inner = _chain(self._dispatch(f_dist, nz, npar), CHAIN, "event_rounds")
-            outer = _chain(inner, MAX_ROUNDS // CHAIN, "event_iteration")
-            C = ca.MX.sym("C", outer.size1_in(0))
-            K = ca.MX.sym("K", outer.size1_in(1))
-            self._chain_fn = ca.Function("event_iteration", [C, K], list(outer(C, K)),
+            jacobi = self._round(f_dist, nz, npar)
+            sweep = self._round(f_dist, nz, npar, sweep=True)
+            nx, nr = self.nx, self.nr
+            nC = jacobi.size1_in(0)
+            C = ca.MX.sym("C", nC)
+            K = ca.MX.sym("K", jacobi.size1_in(1))
+            skip = ca.Function("event_settled", [C, K], [C])
+            # index 0: settled (copy), 1: a round, otherwise: a sweep
+            pick = ca.Function.conditional("event_round_if", [skip, jacobi], sweep)
+            out = C
+            for _ in range(CHAIN):
+                modes = out[nx:nx + nr]
+                cycling = ca.logic_and(ca.sum1(modes != out[nx + 2 * nr:nx + 3 * nr]) > 0,
+                                       ca.sum1(modes != out[nx + 3 * nr:nx + 4 * nr]) == 0)
+                out = pick(out[nC - 1] * (1 + cycling), out, K)
+            rounds = ca.Function("event_rounds", [C, K], [out])
+            more = ca.Function.conditional("event_rounds_if", [skip], rounds)
+            out = C
+            for _ in range(MAX_ROUNDS // CHAIN):
+                out = more(out[nC - 1], out, K)
+            self._chain_fn = ca.Function("event_iteration", [C, K], [out],
                                          {"never_inline": True})
         return self._chain_fn
 
@@ -590,14 +598,15 @@ class Lowering:
         X1 = ca.vertcat(x, flipped, counters, tlast)
         d0 = f_dist(t, X1, z, p)[0]
         dref = f_dist(t, X, z, p)[0]
-        K = ca.vertcat(t, z, p, X, sel, d0, dref, fixed)
+        K = ca.vertcat(t, z, p, tlast, counters, sel, d0, dref, fixed)
         it = self._iterate(f_dist, z.numel(), p.numel())
-        Cf, looping = it(ca.vertcat(X1, ca.DM.zeros(3 * nr)), K)
+        Cf = it(ca.vertcat(x, flipped, counters, ca.DM.zeros(2 * nr), 1), K)
         xf = Cf[:nx] if nx else ca.SX(0, 1)
         modes_f = Cf[nx:nx + nr]
         cnt_f = Cf[nx + nr:nx + 2 * nr]
-        te_f = Cf[nx + 2 * nr:nx + 3 * nr]
-        lastchg = Cf[nx + 3 * nr:nx + 4 * nr]
+        te_f = tlast
+        lastchg = modes_f != Cf[nx + 2 * nr:nx + 3 * nr]     # in the last round
+        looping = Cf[nx + 4 * nr]
         initial = ca.DM([1.0 if op == "initial" else 0.0 for op in self.ops])
         modes_f = initial + (1 - initial) * modes_f          # initial() is over
         counted = ordinary * ca.logic_or(sel, modes_f != modes)
