@@ -12,9 +12,11 @@ import logging as _logging
 _logging.getLogger("mechatron").addHandler(_logging.NullHandler())
 
 from mechatron.compiler import CompiledModel, compile_model  # noqa: E402
-from mechatron.core import (Across, Component, Connector, Domain, Input, Output, Parameter,
-                            Start, System, Through, Variable, connect, der, if_else)
-from mechatron.core.events import Clock, sample, when
+from mechatron.core import (Across, Component, Connector, Discrete, Domain, Input, Output,
+                            Parameter, Start, System, Through, Variable, connect, der,
+                            if_else, logic_and, logic_not, logic_or)
+from mechatron.core.events import (Clock, initial, pre, reinit, sample, steady_state,
+                                   terminal, when)
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers import simulate
 from mechatron.analysis import OperatingPoint, linearize, trim
@@ -24,7 +26,8 @@ __version__ = "0.1.0"
 
 __all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable", "Start",
            "Across", "Through", "Input", "Output", "connect", "der", "if_else",
-           "Clock", "sample", "when",
+           "Clock", "sample", "when", "Discrete", "pre", "initial", "terminal", "reinit",
+           "steady_state", "logic_and", "logic_or", "logic_not",
            "compile_model", "CompiledModel", "simulate", "SimResult", "SolverStats",
            "linearize", "trim", "OperatingPoint",
            "library", "models"]

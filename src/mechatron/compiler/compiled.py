@@ -21,7 +21,7 @@ from mechatron.units import to_si
 __all__ = ["CompiledModel"]
 
 _FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition", "f_scales",
-          "f_events")
+          "f_events", "f_init", "f_dist2")
 
 
 @dataclass
@@ -72,6 +72,12 @@ class CompiledModel:
     #: ``X`` after the events found at a point (ticks due, relations changed, their
     #: actions): called at the initial time and at the end of every fixed step.
     f_events: ca.Function = None
+    #: Residuals of the initial equations (``initial_equations()``), or None: they hold
+    #: at ``t0`` beside the start values of high priority (see solvers.initial).
+    f_init: ca.Function = None
+    #: ``(d, d_dot, d_ddot)`` of the relations: distances and their first two time
+    #: derivatives along the trajectory (modes of relations at rest on their surface).
+    f_dist2: ca.Function = None
     param_bounds: list = field(default_factory=list)   # (min or None, max or None)
     #: External inputs (signal inputs of the root component) by instance path: each is a
     #: slot ``input_index[k]`` of ``p`` that ``simulate(inputs=...)`` fills with a signal
@@ -168,6 +174,8 @@ class CompiledModel:
         for key in ("input_names", "input_index", "input_units", "input_docs",
                     "input_defaults"):   # files saved before external inputs existed
             state.setdefault(key, [])
+        state.setdefault("f_init", None)
+        state.setdefault("f_dist2", None)
         for key in _FUNCS:
             if state.get(key) is not None:
                 state[key] = ca.Function.deserialize(state[key])

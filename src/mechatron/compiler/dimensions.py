@@ -403,15 +403,19 @@ def _event_rows(flat) -> tuple[list, list]:
         for var, expr in list(action.outputs) + list(action.updates):
             rows.append(ca.SX(var) - expr)
             origins.append((owner, f"{_short(var)} := {_short(expr)} (event action)"))
-        trig = action.trigger
-        if isinstance(trig, Clock):
-            for what, value in (("period", trig.period), ("offset", trig.offset)):
-                rows.append(value - t)
-                origins.append((owner, f"the sample clock's {what} {_short(value)}, "
-                                       "a time"))
-        else:
-            rows.append(ca.SX(trig))
-            origins.append((owner, f"when {_short(trig)} (event condition)"))
+        branches = getattr(action, "branches", None)
+        triggers = [c for conds, _ in branches for c in conds] if branches else \
+            [action.trigger]
+        for trig in triggers:
+            clock = getattr(trig, "clock", trig)       # sample(start, interval)
+            if isinstance(clock, Clock):
+                for what, value in (("period", clock.period), ("offset", clock.offset)):
+                    rows.append(value - t)
+                    origins.append((owner, f"the sample clock's {what} {_short(value)}, "
+                                           "a time"))
+            else:
+                rows.append(ca.SX(trig))
+                origins.append((owner, f"when {_short(trig)} (event condition)"))
     return rows, origins
 
 

@@ -93,6 +93,10 @@ class FlatModel:
     connection_sets: list = field(default_factory=list)
     #: Event actions (``mt.sample``/``mt.when``) as (EventAction, owner path).
     events: list = field(default_factory=list)
+    #: Discrete variables (see _discrete_declarations): name -> "real"/"integer"/"boolean".
+    discrete: dict = field(default_factory=dict)
+    #: Equations of ``initial_equations()``, holding at the initial time only.
+    initial_equations: list = field(default_factory=list)
 
     @property
     def time(self) -> ca.SX:
@@ -162,6 +166,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     try:
         with flat.context:
             connects = _collect_equations(flat, elements, problems)
+            _discrete_declarations(flat, elements, problems)
         _connections(flat, model, elements, connects, problems)
     finally:
         for el in elements:
@@ -710,3 +715,58 @@ def _check_references(flat, model, elements, sets, problems) -> None:
             continue
         problems.append(f"{domain.name} network of {', '.join(owners)} has no reference. "
                         f"{domain.hint or 'Add a reference component to it.'}")
+
+
+# -- hybrid declarations (mt.Discrete, initial_equations); kept apart from the passes above
+
+def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
+    """Record the discrete variables with their kind and collect initial equations.
+
+    A ``Discrete`` declaration is a discrete state even if no action assigns it (then it
+    keeps its start value: ``der(v) == 0``); an action target that is not differentiated
+    anywhere is a discrete Real (its ``der(v) == 0`` was added by ``_discrete_states``).
+    """
+    from mechatron.core.declarations import Discrete
+    ctx = flat.context
+    for eq in flat.equations:
+        if isinstance(eq.origin, str) and eq.origin.endswith("changed only by events)"):
+            name = ctx.integral.get(eq.residual.name()) if eq.residual.is_symbolic() else None
+            if name:
+                flat.discrete[name] = "real"
+    for el in elements:
+        for key, decl in type(el)._declarations.items():
+            if not isinstance(decl, Discrete):
+                continue
+            path = _join(el.path, key)
+            sym_name = flat.variables[path].sym.name()
+            if sym_name not in flat.discrete and sym_name in ctx.derivative:
+                problems.append(f"{el.describe()}: '{key}' is a Discrete variable and is "
+                                "differentiated. Declare it as a Variable, or remove der().")
+                continue
+            if sym_name not in flat.discrete:
+                flat.equations.append(FlatEquation(
+                    ctx.der_symbol(sym_name), f"{el.path or flat.name}: der({sym_name}) == 0 "
+                    "(discrete variable, changed only by events)", el.path))
+            flat.discrete[sym_name] = decl.discrete_kind
+    for el in elements:
+        if not isinstance(el, Component):
+            continue
+        for klass in reversed(type(el).__mro__):
+            own = vars(klass).get("initial_equations")
+            if own is None or klass is Component:
+                continue
+            try:
+                items = own(el)
+            except ModelError:
+                raise
+            except Exception as exc:
+                raise ModelError(f"{el.describe()}: {klass.__name__}.initial_equations() "
+                                 f"failed: {type(exc).__name__}: {exc}",
+                                 path=el.path) from exc
+            for k, item in enumerate(_as_equations(items)):
+                before = len(flat.equations)
+                _add_equation(flat, el, klass, k, item, problems)
+                for eq in flat.equations[before:]:
+                    eq.residual = eq.origin.lhs - eq.origin.rhs
+                    flat.initial_equations.append(eq)
+                del flat.equations[before:]

@@ -12,7 +12,8 @@ from mechatron.compiler.alias import eliminate_aliases
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.compiler.dimensions import check_dimensions as _check_dimensions
 from mechatron.compiler.events import Lowering as EventLowering
-from mechatron.compiler.events import clock_distances, direct_relations, prepare_events
+from mechatron.compiler.events import (bind_pre, clock_distances, direct_relations,
+                                        prepare_events, replace_pre)
 from mechatron.compiler.flatten import flatten
 from mechatron.compiler.relations import extract_relations
 from mechatron.compiler.structure import lower
@@ -92,6 +93,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         clock = now
 
     flat = flatten(model, name)
+    replace_pre(flat)
     n_vars_flat = len(flat.variables)
     n_eqs_flat = len(flat.equations) + len(flat.aliases)
     lap("flatten")
@@ -135,26 +137,32 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     out_expr = _logged_expressions(flat, alias)
     dists = [r.d for r in relations]
     n_ode, n_res, n_out = len(low.ode), len(low.residuals), len(out_expr)
-    pile = list(low.ode) + list(low.residuals) + out_expr + dists + plan.exprs
+    shadow = ca.SX.sym("pre_x", len(low.states))
+    bind_pre(plan, flat, alias, list(low.states), shadow)
+    ini = _initial_residuals(flat, alias)
+    n_ini = len(ini)
+    n_dist = n_ode + n_res + n_out
+    pile = list(low.ode) + list(low.residuals) + out_expr + dists + ini + plan.exprs
     if low.assigned:
         _, pile = ca.substitute_inplace(low.assigned, low.assigned_expr, pile, False)
     if plan:   # action right-hand sides: relations read directly, not through modes
         n_act = len(plan.exprs)
         plan.exprs = direct_relations(pile[len(pile) - n_act:], relations,
-                                      pile[len(pile) - n_act - len(dists):len(pile) - n_act])
+                                      pile[n_dist:n_dist + len(dists)])
         pile = pile[:len(pile) - n_act]
     # bind relation placeholders to modes
     modes = ca.SX.sym("mode", len(relations))
     counters = ca.SX.sym("events", len(relations))
     tlast = ca.SX.sym("t_event", len(relations))
     if relations:
-        values = [(modes[k] + 1) / 2 if r.op != "sign" else modes[k]
-                  for k, r in enumerate(relations)]
+        values = [modes[k] if r.op == "sign" else (1 - modes[k]) / 2 if r.op == "initial"
+                  else (modes[k] + 1) / 2 for k, r in enumerate(relations)]
         pile = ca.substitute(pile, [r.placeholder for r in relations], values)
     ode = pile[:n_ode]
     res = pile[n_ode:n_ode + n_res]
     outs = pile[n_ode + n_res:n_ode + n_res + n_out]
-    dist = pile[n_ode + n_res + n_out:]
+    dist = pile[n_dist:n_dist + len(dists)]
+    ini = pile[n_dist + len(dists):]
     for k, d_clock in clock_distances(plan, relations, ctx.time, counters).items():
         dist[k] = d_clock
 
@@ -176,19 +184,25 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # is exactly zero (a pulse starting at t = 0 rises; it is not "off")
     ddot = ca.jacobian(dvec, t) + ca.jtimes(dvec, X, xdot) if nr else ca.SX(0, 1)
     f_dist = ca.Function("dist", args, [dvec, ddot], argn, ["d", "d_dot"])
+    # and the second derivative, for a relation at rest on its surface to first order (a
+    # clutch at the instant its torque reaches break-away: it slides off at once)
+    d2dot = ca.jacobian(ddot, t) + ca.jtimes(ddot, X, xdot) if nr else ca.SX(0, 1)
+    f_dist2 = ca.Function("dist2", args, [dvec, ddot, d2dot], argn, ["d", "d_dot", "d_ddot"])
     # + 1e-300: an indicator exactly 0 at the end of a step (an edge falling on an output
     # time) would be followed by a negative value without a sign change the solver sees
     f_zero = ca.Function("zero", args, [modes * dvec + 1e-300 if nr else ca.SX(0, 1)],
                          argn, ["zero"])
     index = ca.SX.sym("index")
     events = EventLowering(plan, relations, flat, alias, list(low.states),
-                           list(low.state_syms), flat.name)
-    post = events.transition(f_dist, index, t, x, modes, counters, tlast, z, p) if nr \
+                           list(low.state_syms), flat.name, p=p, shadow=shadow, t=t, z=z)
+    post = events.transition(f_dist2, index, t, x, modes, counters, tlast, z, p) if nr \
         else X
     f_transition = ca.Function("transition", [index, t, X, z, p], [post, z],
                                ca.event_in()[:5], ["post_x", "post_z"])
     f_events = ca.Function("events", args, [events.step_events(
-        f_dist, t, x, modes, counters, tlast, z, p) if nr else X], argn, ["post_x"])
+        f_dist2, t, x, modes, counters, tlast, z, p) if nr else X], argn, ["post_x"])
+    f_init = _initial_function(flat, ini, args, argn, ca.vertcat(*low.state_syms, z, p, t)
+                               if n_ini else None)
     scales = ca.vertcat(*flat.time_scales) if flat.time_scales else ca.SX(0, 1)
     f_scales = ca.Function("scales", [p], [scales], ["p"], ["scales"])
     lap("lowering")
@@ -224,6 +238,10 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         "relations": len(relations),
         "event_actions": len(plan.groups),
         "when_relations": [k for k, w in enumerate(events.is_when) if w],
+        "terminal_relations": [k for k, r in enumerate(relations) if r.op == "terminal"],
+        "relation_labels": list(events.labels),
+        "discrete": dict(flat.discrete),
+        "initial_equations": [str(eq.origin) for eq in flat.initial_equations],
         "timings": timings,
     }
     cm = CompiledModel(
@@ -235,8 +253,8 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         relations=[(r.owner, r.op) for r in relations],
         x_start=np.array(state_starts, dtype=float), x_priority=state_prior,
         z_start=z_start, targets=targets, f_ode=f_ode, f_alg=f_alg, f_out=f_out,
-        f_zero=f_zero, f_dist=f_dist, f_transition=f_transition, f_scales=f_scales,
-        f_events=f_events,
+        f_zero=f_zero, f_dist=f_dist, f_dist2=f_dist2, f_transition=f_transition, f_scales=f_scales,
+        f_events=f_events, f_init=f_init,
         param_bounds=[q.bounds for q in params], report=report,
         input_names=[q.name for q in params if q.is_input],
         input_index=[i for i, q in enumerate(params) if q.is_input],
@@ -245,6 +263,38 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         input_defaults=[_input_default(flat, q.name) for q in params if q.is_input])
     timings["total"] = sum(timings.values())
     return cm
+
+
+def _initial_residuals(flat, alias) -> list:
+    """Residuals of the initial equations with aliases replaced by representatives."""
+    res = [eq.residual for eq in flat.initial_equations]
+    if not res:
+        return []
+    old, new = [], []
+    for name, (rep, k) in alias.eliminated.items():
+        old.append(flat.variables[name].sym)
+        new.append(ca.SX(k) if rep is None else k * flat.variables[rep].sym)
+    return ca.substitute(res, old, new) if old else res
+
+
+def _initial_function(flat, ini, args, argn, known):
+    """``init(t, X, z, p)``: the residuals of the initial equations; None without any.
+    A symbol left in them (a derivative that is not a state's, an unknown eliminated by
+    index reduction) is an error naming the equation."""
+    if known is None:
+        return None
+    from mechatron.errors import StructuralError
+    names = {s.name() for s in ca.symvar(ca.vertcat(known, args[1]))}
+    for eq, r in zip(flat.initial_equations, ini):
+        free = [s.name() for s in ca.symvar(r) if s.name() not in names
+                and not s.name().startswith(("mode_", "events_", "t_event_"))]
+        if free:
+            raise StructuralError(
+                f"model '{flat.name}': initial equation '{eq.origin}' uses "
+                f"{', '.join(free[:4])}, which the compiled model does not compute (a "
+                "derivative of a variable that is not a state?). Write it in terms of the "
+                "states and their derivatives.", variables=free, path=flat.name)
+    return ca.Function("init", args, [ca.vertcat(*ini)], argn, ["residual"])
 
 
 _STATE_SELECT = {"avoid": -1.0, "default": 0.0, "prefer": 1.0}

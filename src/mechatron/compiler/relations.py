@@ -30,6 +30,7 @@ class Relation:
     op: str          # "<", "<=", "sign"
     d: ca.SX         # the distance whose sign is the mode
     owner: str       # component path, for event statistics
+    text: str = ""   # the relation as written (``a < b``), for messages
 
 
 def extract_relations(residuals: list[ca.SX], owners: list[str],
@@ -75,14 +76,20 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
     return out, relations
 
 
-def _placeholder(relations: list[Relation], op: str, d: ca.SX, owner: str) -> ca.SX:
+def _placeholder(relations: list[Relation], op: str, d: ca.SX, owner: str,
+                 text: str = "") -> ca.SX:
     """The placeholder of this relation; one relation written twice is one mode."""
     for r in relations:
         if r.owner == owner and r.op == op and ca.is_equal(r.d, d, 20):
             return r.placeholder
     ph = ca.SX.sym(f"rel{len(relations)}[{owner}]")
-    relations.append(Relation(ph, op, d, owner))
+    relations.append(Relation(ph, op, d, owner, text))
     return ph
+
+
+def _text(a: ca.SX, op: str, b: ca.SX) -> str:
+    text = f"{a} {op} {b}"
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _is_unary(op: int) -> bool:
@@ -114,9 +121,11 @@ def _rebuild(expr: ca.SX, owner: str, relations: list[Relation]) -> ca.SX:
         elif op in _REL_OPS:
             if op == ca.OP_SIGN:
                 d = work[i[0]]
+                text = f"sign({work[i[0]]})"
             else:
                 d = work[i[1]] - work[i[0]]  # a < b  <=>  b - a > 0
-            work[o[0]] = _placeholder(relations, _REL_OPS[op], d, owner)
+                text = _text(work[i[0]], _REL_OPS[op], work[i[1]])
+            work[o[0]] = _placeholder(relations, _REL_OPS[op], d, owner, text)
         elif op in _UNARY:
             work[o[0]] = ca.SX.unary(op, work[i[0]])
         else:

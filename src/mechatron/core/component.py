@@ -258,6 +258,13 @@ class Component(Element, partial=True):
         """Equations of this class (not of its parents), written with ``==``."""
         return []
 
+    def initial_equations(self) -> list:
+        """Equations that hold at the initial time only (Modelica's ``initial equation``),
+        e.g. ``mt.der(self.w) == 0`` for a steady start (see ``mt.steady_state``). They
+        replace start values: a state's start value becomes a guess unless it was given
+        with priority high. Like ``equations()``, they add up along the class hierarchy."""
+        return []
+
     def time_scales(self) -> list:
         """Shortest intervals (expressions of parameters, s) this component switches on,
         e.g. a pulse's on and off times. Variable-step solvers keep their steps below half
@@ -286,6 +293,7 @@ class System(Component):
         self._name = name
         self._connects: list[Connect] = []
         self._extra: list = []
+        self._initial: list = []
 
     def add(self, name: str, element: Element) -> Element:
         """Add a sub-component (or port) under ``name`` and return it."""
@@ -336,5 +344,13 @@ class System(Component):
         """Add an equation written with ``==`` over the parts' variables."""
         self._extra.append(equation)
 
+    def add_initial_equation(self, equation) -> None:
+        """Add an equation that holds at the initial time only (see
+        :meth:`Component.initial_equations`)."""
+        self._initial.append(equation)
+
     def equations(self):
         return list(self._connects) + [eq() if callable(eq) else eq for eq in self._extra]
+
+    def initial_equations(self):
+        return [eq() if callable(eq) else eq for eq in self.__dict__.get("_initial", [])]

@@ -14,7 +14,8 @@ import casadi as ca
 from mechatron.core.component import Connect
 from mechatron.errors import ModelError
 
-__all__ = ["der", "connect", "current", "if_else", "BuildContext"]
+__all__ = ["der", "connect", "current", "if_else", "logic_and", "logic_or", "logic_not",
+           "BuildContext"]
 
 _current: contextvars.ContextVar = contextvars.ContextVar("mechatron_build", default=None)
 
@@ -27,6 +28,20 @@ class BuildContext:
         self.derivative: dict[str, ca.SX] = {}   # variable name -> der symbol
         self.unknowns: dict[str, ca.SX] = {}     # variable name -> symbol (differentiable)
         self.integral: dict[str, str] = {}       # der symbol name -> variable name
+        self.pre: dict[str, ca.SX] = {}          # variable name -> pre() symbol
+        self.special: dict[str, ca.SX] = {}      # "initial"/"terminal" -> condition symbol
+
+    def pre_symbol(self, name: str) -> ca.SX:
+        sym = self.pre.get(name)
+        if sym is None:
+            sym = self.pre[name] = ca.SX.sym(f"pre({name})")
+        return sym
+
+    def special_symbol(self, key: str) -> ca.SX:
+        sym = self.special.get(key)
+        if sym is None:
+            sym = self.special[key] = ca.SX.sym(f"{key}()")
+        return sym
 
     def der_symbol(self, name: str) -> ca.SX:
         sym = self.derivative.get(name)
@@ -84,3 +99,24 @@ def connect(*ports) -> Connect:
 def if_else(cond, a, b):
     """``a`` where ``cond`` holds, else ``b``; a relation in ``cond`` generates events."""
     return ca.if_else(cond, a, b)
+
+
+def logic_and(*conditions):
+    """True where every condition holds (relations in it generate events)."""
+    out = conditions[0]
+    for c in conditions[1:]:
+        out = ca.logic_and(out, c)
+    return out
+
+
+def logic_or(*conditions):
+    """True where any condition holds (relations in it generate events)."""
+    out = conditions[0]
+    for c in conditions[1:]:
+        out = ca.logic_or(out, c)
+    return out
+
+
+def logic_not(condition):
+    """True where ``condition`` does not hold."""
+    return ca.logic_not(condition)

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from mechatron.errors import ModelError
 from mechatron.units import check_unit
 
-__all__ = ["Parameter", "ParameterExpression", "Variable", "Across", "Through", "Input",
-           "Output", "Start", "PRIORITIES"]
+__all__ = ["Parameter", "ParameterExpression", "Variable", "Discrete", "Across", "Through",
+           "Input", "Output", "Start", "PRIORITIES", "DISCRETE_KINDS"]
 
 PRIORITIES = ("high", "low", "none")
 STATE_SELECT = ("avoid", "default", "prefer")
@@ -221,6 +221,37 @@ class Variable(Declaration):
         self.start = start
         self.priority = priority
         self.state_select = state_select
+
+
+DISCRETE_KINDS = ("real", "integer", "boolean")
+
+
+class Discrete(Variable):
+    """A discrete variable: constant between events, changed only by ``when`` and
+    ``sample`` actions (Modelica's ``discrete Real``, ``Integer`` and ``Boolean``).
+
+    Parameters
+    ----------
+    unit : str
+        SI unit (``"1"`` for counters and flags).
+    start : float, int or bool
+        Value before the first event (``True``/``False`` for a Boolean).
+    kind : {"real", "integer", "boolean"}
+        What an assignment stores: a ``real`` stores the value, an ``integer`` the value
+        rounded to the nearest integer, a ``boolean`` 1 for any nonzero value and 0 for
+        zero. In equations and conditions a Boolean is 0 or 1 (``mt.if_else(self.on, a, b)``
+        reads it without generating an event: it changes only at events).
+    doc : str
+        One-line description.
+    """
+
+    kind = "discrete variable"
+
+    def __init__(self, unit: str = "1", *, start=0.0, kind: str = "real", doc: str = ""):
+        if kind not in DISCRETE_KINDS:
+            raise ValueError(f"Discrete: kind must be one of {DISCRETE_KINDS}, got {kind!r}.")
+        super().__init__(unit, start=float(start), priority="none", doc=doc)
+        self.discrete_kind = kind
 
 
 class Across(Variable):

@@ -21,23 +21,47 @@ __all__ = ["initialize", "initial_modes"]
 
 def initial_modes(cm: CompiledModel, t0: float, x: np.ndarray, z: np.ndarray,
                   p: np.ndarray, counters: np.ndarray | None = None) -> np.ndarray:
-    """Modes of the relations at the initial point (iterated for nested relations)."""
+    """Modes of the relations at the initial point, iterated to a fixed point (a relation
+    whose distance depends on another's mode), at most MAX_ROUNDS rounds."""
+    from mechatron.core.events import MAX_ROUNDS
     nr = cm.nr
     if nr == 0:
         return np.zeros(0)
     modes = np.ones(nr)
     le = np.array([op in ("<=", "sign") for _, op in cm.relations])
     counters = np.zeros(nr) if counters is None else counters
-    for _ in range(4):
+    f = cm.f_dist2 if cm.f_dist2 is not None else cm.f_dist
+
+    def read(modes):
         X = np.concatenate([x, modes, counters, np.full(nr, t0)])
-        d, d_dot = (np.array(v, dtype=float).ravel() for v in cm.f_dist(t0, X, z, p))
-        # on the boundary, the direction of motion decides; at rest, the relation's op
-        at_zero = np.where(d_dot > 0, True, np.where(d_dot < 0, False, le))
-        new = np.where((d > 0) | ((d == 0) & at_zero), 1.0, -1.0)
+        d, d_dot, *more = (np.array(v, dtype=float).ravel() for v in f(t0, X, z, p))
+        # on the boundary, the direction of motion decides (to second order); at rest,
+        # the relation's op
+        rest = le if not more else np.where(more[0] > 0, True, np.where(more[0] < 0,
+                                                                         False, le))
+        at_zero = np.where(d_dot > 0, True, np.where(d_dot < 0, False, rest))
+        return np.where((d > 0) | ((d == 0) & at_zero), 1.0, -1.0)
+
+    before = None
+    for _ in range(MAX_ROUNDS):
+        new = read(modes)
+        if before is not None and np.array_equal(new, before):
+            # a cycle of period two (two sliding modes pointing into each other): re-read
+            # one relation at a time, each seeing the ones already re-read
+            new = modes.copy()
+            for k in range(nr):
+                new[k] = read(new)[k]
         if np.array_equal(new, modes):
-            break
-        modes = new
-    return modes
+            return modes
+        last, before, modes = new != modes, modes, new
+    labels = cm.report.get("relation_labels") or [op for _, op in cm.relations]
+    bad = [f"{cm.relations[k][0] or cm.name}: {labels[k]}" for k in np.nonzero(last)[0]]
+    raise InitializationError(
+        f"model '{cm.name}': the modes of the relations have no consistent value at "
+        f"t0 = {t0:g} s; after {MAX_ROUNDS} rounds these still change: "
+        f"{'; '.join(bad[:6])}. Gate the relations by the mode they depend on, or add "
+        "hysteresis.", variables=[cm.relations[k][0] for k in np.nonzero(last)[0]],
+        path=cm.name)
 
 
 def initialize(cm: CompiledModel, p: np.ndarray, t0: float = 0.0):
@@ -47,7 +71,7 @@ def initialize(cm: CompiledModel, p: np.ndarray, t0: float = 0.0):
     z = cm.z_start.copy()
     modes = initial_modes(cm, t0, x, z, p)
     report = []
-    if cm.nz or cm.targets:
+    if cm.nz or cm.targets or cm.f_init is not None:
         x, z = _solve(cm, p, t0, x, z, modes)
         modes = initial_modes(cm, t0, x, z, p)
     nr = cm.nr
@@ -58,7 +82,9 @@ def initialize(cm: CompiledModel, p: np.ndarray, t0: float = 0.0):
         # a when condition that holds at t0 acts at t0 (a relay starts on above its
         # on-point): its mode is taken as false before, so the check sees it rise
         X0[[cm.nx + k for k in cm.report.get("when_relations", [])]] = -1.0
-        X0 = np.array(cm.f_events(t0, X0, z, p), dtype=float).ravel()
+        # the initial event: an event of no relation (index -1), iterated as any other
+        X0 = np.array(cm.f_transition(-1, t0, X0, z, p)[0], dtype=float).ravel()
+        _check_loop(cm, X0, "at the initial time")
         plain = np.array([op != "clock" for _, op in cm.relations])
         X0[cm.nx + nr:cm.nx + 2 * nr][plain] = 0.0      # only ticks count at t0
         X0[cm.nx + 2 * nr:][plain] = t0
@@ -90,6 +116,10 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
     if nz:
         hard.append(cm.f_alg(t0, X, zs, ca.DM(p)))
         hard_names += [f"algebraic equation {k + 1}" for k in range(nz)]
+    if cm.f_init is not None:
+        hard.append(cm.f_init(t0, X, zs, ca.DM(p)))
+        hard_names += [f"initial equation '{text}'" for text in
+                       cm.report.get("initial_equations", [])]
     for k, name in enumerate(cm.state_names):
         prio = cm.x_priority[k]
         if prio == "high":
@@ -142,9 +172,21 @@ def _conflicts(cm, g, w, wv, names, viol):
     for k in range(rank, jac.shape[0]):
         vec = u[:, k]
         involved.update(np.nonzero(np.abs(vec) > 1e-6)[0].tolist())
-    suspects = [names[i] for i in sorted(involved) if "(high)" in names[i]]
+    suspects = [names[i] for i in sorted(involved)
+                if "(high)" in names[i] or names[i].startswith("initial equation")]
     raise InitializationError(
         f"model '{cm.name}': no initial point meets every high-priority target "
         f"(violation {viol:.3g}). Conflicting targets: {', '.join(suspects) or 'unknown'}."
         " Lower the priority of one of them, or make them consistent.",
         variables=[s.split(" = ")[0] for s in suspects], path=cm.name)
+
+
+def _check_loop(cm: CompiledModel, X: np.ndarray, where: str) -> None:
+    """Raise if the event iteration found no fixed point (see compiler.events)."""
+    from mechatron.compiler.events import LOOP_FLAG
+    nx, nr = cm.nx, cm.nr
+    bad = [k for k in range(nr) if X[nx + nr + k] >= 0.75 * LOOP_FLAG]
+    if bad:
+        from mechatron.solvers.hybrid import loop_message
+        raise InitializationError(loop_message(cm, bad, where), path=cm.name,
+                                  variables=[cm.relations[k][0] for k in bad])

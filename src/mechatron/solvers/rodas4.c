@@ -52,10 +52,12 @@ enum {
     MT_CHATTERING = -7
 };
 
-/* One evaluation context per generated function: its work arrays. */
+/* One evaluation context per generated function: its work arrays (argument and result
+ * pointer arrays are as long as the function asks: a transition that calls the event
+ * iteration needs more than its own five arguments). */
 typedef struct {
-    const casadi_real *arg[8];
-    casadi_real *res[8];
+    const casadi_real **arg;
+    casadi_real **res;
     casadi_int *iw;
     casadi_real *w;
 } mt_ctx;
@@ -64,15 +66,22 @@ static int mt_ctx_init(mt_ctx *c, int (*work)(casadi_int *, casadi_int *, casadi
                                              casadi_int *)) {
     casadi_int n_arg, n_res, n_iw, n_w;
     work(&n_arg, &n_res, &n_iw, &n_w);
-    if (n_arg > 8 || n_res > 8) return MT_NO_MEMORY;
+    if (n_arg < 8) n_arg = 8;
+    if (n_res < 8) n_res = 8;
+    c->arg = (const casadi_real **)calloc((size_t)n_arg, sizeof(casadi_real *));
+    c->res = (casadi_real **)calloc((size_t)n_res, sizeof(casadi_real *));
     c->iw = (casadi_int *)malloc(sizeof(casadi_int) * (size_t)(n_iw > 0 ? n_iw : 1));
     c->w = (casadi_real *)malloc(sizeof(casadi_real) * (size_t)(n_w > 0 ? n_w : 1));
-    return (c->iw && c->w) ? MT_OK : MT_NO_MEMORY;
+    return (c->arg && c->res && c->iw && c->w) ? MT_OK : MT_NO_MEMORY;
 }
 
 static void mt_ctx_free(mt_ctx *c) {
+    free((void *)c->arg);
+    free(c->res);
     free(c->iw);
     free(c->w);
+    c->arg = 0;
+    c->res = 0;
     c->iw = 0;
     c->w = 0;
 }
@@ -207,7 +216,10 @@ static void mt_hermite(const double *x0, const double *f0, const double *x1,
     double a0 = 2 * th3 - 3 * th2 + 1, b0 = (th3 - 2 * th2 + th) * h;
     double a1 = -2 * th3 + 3 * th2, b1 = (th3 - th2) * h;
     int i;
-    for (i = 0; i < n; ++i) out[i] = a0 * x0[i] + b0 * f0[i] + a1 * x1[i] + b1 * f1[i];
+    (void)a0;
+    /* x0 + a1 (x1 - x0): a state that does not move between the steps (a discrete
+     * state, der = 0) is reproduced exactly, not up to rounding of a0 + a1 = 1 */
+    for (i = 0; i < n; ++i) out[i] = x0[i] + a1 * (x1[i] - x0[i]) + b0 * f0[i] + b1 * f1[i];
 }
 
 /* Integrate; see the top of the file.  x0 holds the whole integration state

@@ -13,6 +13,7 @@ from mechatron.errors import SimulationError
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.diagnose import describe_nonfinite
 from mechatron.solvers.fixed import METHODS, integrate_fixed
+from mechatron.solvers.hybrid import terminal_event
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
 from mechatron.solvers.logging import evaluate_outputs
@@ -133,6 +134,9 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                             rhs_evals=int(st.get("n_rhs", st.get("nfevals", 0))),
                             jac_evals=int(st.get("n_jac", st.get("n_call_jacF", 0))))
     _check_chattering(cm, Xf, stats.solver)
+    if cm.report.get("terminal_relations"):     # when(terminal()) acts at the last point
+        Xf, Y[:, -1] = terminal_event(cm, float(t[-1]), Xf, z0, p)
+        _check_chattering(cm, Xf, stats.solver)
     stats.events = _events(cm, Xf)
     stats.wall_time = _time.perf_counter() - clock
     stats.compile_time = compile_time
@@ -186,8 +190,14 @@ def _check_chattering(cm: CompiledModel, Xf: np.ndarray, solver: str) -> None:
     """Raise if the transition marked a relation as chattering (see
     :mod:`mechatron.compiler.events`): after its event it was driven straight back onto
     its switching surface, so it would switch again at once, endlessly."""
-    from mechatron.compiler.events import CHATTER_FLAG
+    from mechatron.compiler.events import CHATTER_FLAG, LOOP_FLAG
     nx, nr = cm.nx, cm.nr
+    looping = [k for k in range(nr) if Xf[nx + nr + k] >= 0.75 * LOOP_FLAG]
+    if looping:
+        t_ev = float(Xf[nx + 2 * nr + looping[0]])
+        from mechatron.solvers.hybrid import loop_message
+        raise SimulationError(loop_message(cm, looping, f"at t = {t_ev:.9g} s ({solver})"),
+                              path=cm.name, variables=[cm.relations[k][0] for k in looping])
     bad = [k for k in range(nr) if Xf[nx + nr + k] >= 0.5 * CHATTER_FLAG]
     if not bad:
         return
