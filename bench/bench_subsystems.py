@@ -18,6 +18,8 @@ Run: ``python bench/bench_subsystems.py [--quick]``.
 
 from __future__ import annotations
 
+import time
+
 import _common  # noqa: F401  (import path)
 from _common import log, main, ratio, repeat, summary
 
@@ -76,9 +78,19 @@ def stage_ladder(n: int) -> mt.System:
 
 
 def _compile(build, n, repeats):
-    cm, times = repeat(lambda: mt.compile_model(build(n)), repeats)
-    counts = cm.report.get("counts", {}) if isinstance(cm.report, dict) else {}
-    return cm, summary(times), counts
+    """Wall-clock and process-CPU medians of fresh compiles (CPU time is less sensitive
+    to other load on a shared machine), with the model's equation counts."""
+    cpu = []
+
+    def once():
+        c0 = time.process_time()
+        cm = mt.compile_model(build(n))
+        cpu.append(time.process_time() - c0)
+        return cm
+
+    cm, times = repeat(once, repeats)
+    counts = {k: cm.report.get(k) for k in ("variables", "equations")}
+    return cm, summary(times), summary(cpu), counts
 
 
 def run(quick: bool = False) -> dict:
@@ -88,8 +100,8 @@ def run(quick: bool = False) -> dict:
     rows = []
     for n in sizes:
         log(f"subsystems: N = {n}")
-        cm_flat, t_flat, c_flat = _compile(flat_ladder, n, repeats)
-        cm_sub, t_sub, c_sub = _compile(stage_ladder, n, repeats)
+        cm_flat, t_flat, cpu_flat, c_flat = _compile(flat_ladder, n, repeats)
+        cm_sub, t_sub, cpu_sub, c_sub = _compile(stage_ladder, n, repeats)
         t = np.linspace(0.0, 1.0, 101)
         a = mt.simulate(cm_flat, 1.0, t_out=t)
         b = mt.simulate(cm_sub, 1.0, t_out=t)
@@ -97,6 +109,9 @@ def run(quick: bool = False) -> dict:
         rows.append({"N": n, "flat_compile": t_flat, "subsystem_compile": t_sub,
                      "ratio_subsystem_over_flat": ratio(t_sub["median_s"],
                                                         t_flat["median_s"]),
+                     "flat_compile_cpu": cpu_flat, "subsystem_compile_cpu": cpu_sub,
+                     "cpu_ratio_subsystem_over_flat": ratio(cpu_sub["median_s"],
+                                                            cpu_flat["median_s"]),
                      "counts_flat": c_flat, "counts_subsystem": c_sub,
                      "states": [len(cm_flat.state_names), len(cm_sub.state_names)],
                      "max_abs_diff_v": diff})

@@ -294,7 +294,7 @@ def _cycle(pending, deps):
 def _targets(plan: EventPlan, flat, alias, states: list[str], name: str):
     """Map every assigned variable to (state index, factor)."""
     index = {n: i for i, n in enumerate(states)}
-    by_sym = {v.sym.name(): n for n, v in flat.variables.items()}
+    by_sym = {n: n for n in flat.variables}     # a variable's symbol is named by its path
     out = []
     for sym_name, is_reinit in zip(plan.targets, plan.reinit):
         var = by_sym[sym_name]
@@ -402,8 +402,7 @@ class Lowering:
         self.nr = len(relations)
         self.nx = len(x_syms)
         self.targets = _targets(plan, flat, alias, states, name) if plan else []
-        by_sym = {v.sym.name(): v.sym.name() for v in flat.variables.values()}
-        self.kinds = [flat.discrete.get(by_sym.get(s, s), "real") for s in plan.targets]
+        self.kinds = [flat.discrete.get(s, "real") for s in plan.targets]
         self.x_syms = x_syms
         self.shadow = shadow if shadow is not None else ca.SX.sym("pre_x", len(x_syms))
         self.p = p if p is not None else ca.SX(0, 1)

@@ -410,7 +410,7 @@ def _discrete_states(flat: FlatModel, problems) -> None:
     """Check the targets of event actions; a target not differentiated anywhere is a
     discrete state: constant between events, ``der(v) == 0``."""
     ctx = flat.context
-    by_sym = {v.sym.name(): v for v in flat.variables.values()}
+    by_sym = flat.variables          # a variable's symbol is named by its path
     done: set[str] = set()
     for action, owner in flat.events:
         for var, _ in action.outputs + action.updates:

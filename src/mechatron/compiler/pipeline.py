@@ -119,7 +119,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     lap("relations")
 
     syms = {n: flat.variables[n].sym for n in alias.unknowns}
-    start_of = {flat.variables[n].sym.name(): _guess(flat, alias, n) for n in alias.unknowns}
+    start_of = {n: _guess(flat, alias, n) for n in alias.unknowns}   # symbols named by path
     p_value = {p.sym.name(): p.value for p in params}
 
     def start_guess(free):
