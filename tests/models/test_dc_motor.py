@@ -91,3 +91,21 @@ def test_build_takes_quantities_with_units():
     assert res.final("w") > 0
     with pytest.raises(mt.errors.UnitError, match="dc_motor.L"):
         ENTRY.build("ode", L="3 kg")
+
+
+def test_the_inputs_variant_is_driven_by_voltage_and_load_torque():
+    """Voltage and load torque as external inputs: the final speed under a load step is
+    (k V - R T) / (R B + k^2); with its defaults it is the database's step response."""
+    import numpy as np
+
+    import mechatron as mt
+    entry = mt.models.get("dc_motor")
+    cm = mt.compile_model(entry.build("inputs"))
+    assert cm.input_names == ["V", "tau_load"]
+    R, k, B = 7.1, 0.151, 1.236e-4
+    t = np.array([0.0, 0.2, 0.2 + 1e-6, 1.0])
+    res = mt.simulate(cm, 0.6, inputs={"V": 12.0, "tau_load": (t, [0.0, 0.0, 0.01, 0.01])},
+                      rtol=1e-10, atol=1e-12)
+    assert res.final("inertia.w") == pytest.approx((k * 12.0 - R * 0.01) / (R * B + k * k),
+                                                   rel=1e-7)
+    assert res.final("load.tau_in") == 0.01

@@ -1,5 +1,7 @@
-"""The brush DC motor of the seed (its table 6-1, calculated values), in three variants:
-an acausal network, user-written ODEs, and a Simulink-style block diagram.
+"""The brush DC motor of the seed (its table 6-1, calculated values), in four variants:
+an acausal network, user-written ODEs, a Simulink-style block diagram, and the network
+with the armature voltage ``V`` and a load torque ``tau_load`` as external inputs
+(``inputs``: driven by ``simulate(inputs=...)``, FMU inputs or a HIL controller).
 
 Armature: ``L di/dt = V - R i - k w``; rotor: ``J dw/dt = k i - B w``. A voltage step of
 ``V`` at ``t = 0``. The analytic final speed is ``k V / (R B + k^2)``.
@@ -99,6 +101,33 @@ def _acausal(V, R, L, k, J, B):
     return m
 
 
+def _inputs(V, R, L, k, J, B):
+    """The acausal network driven from outside: the armature voltage ``V`` and the load
+    torque ``tau_load`` (opposing the rotation) are the model's external inputs (their
+    defaults: the step ``V`` and no load), for ``simulate(inputs=...)``, FMUs and HIL."""
+    m = mt.System("dc_motor", doc="DC motor, acausal network with external inputs")
+    u = m.input("V", unit="V", start=V, doc="Armature voltage")
+    load = m.input("tau_load", unit="N*m", start=0.0, doc="Load torque, opposing rotation")
+    source = m.add("source", el.ControlledVoltageSource())
+    resistor = m.add("resistor", el.Resistor(R=R))
+    inductor = m.add("inductor", el.Inductor(L=L))
+    emf = m.add("emf", em.RotationalEMF(k=k))
+    inertia = m.add("inertia", rot.Inertia(J=J))
+    damper = m.add("damper", rot.RotationalDamper(D=B))
+    brake = m.add("load", rot.IdealTorqueSource())    # reaction -tau_load on the shaft
+    ground = m.add("ground", el.ElectricalReference())
+    fixed = m.add("fixed", rot.RotationalReference())
+    m.connect(u, source.u)
+    m.connect(load, brake.tau_in)
+    m.connect(source.p, resistor.p)
+    m.connect(resistor.n, inductor.p)
+    m.connect(inductor.n, emf.p)
+    m.connect(emf.n, source.n, ground.port)
+    m.connect(emf.A, inertia.port, damper.A, brake.B)
+    m.connect(emf.B, damper.B, brake.A, fixed.port)
+    return m
+
+
 def _ode(V, R, L, k, J, B):
     m = DCMotorODE(V=V, R=R, L=L, k=k, J=J, B=B)
     m._name = "dc_motor"
@@ -117,9 +146,10 @@ ENTRY = register(ModelEntry(
         "J": ParameterInfo("kg*m^2", 4.8e-6, "Rotor inertia", SEED),
         "B": ParameterInfo("N*m*s/rad", 1.236e-4, "Viscous friction coefficient", SEED),
     },
-    variants={"acausal": _acausal, "ode": _ode, "blocks": _blocks},
+    variants={"acausal": _acausal, "ode": _ode, "blocks": _blocks, "inputs": _inputs},
     outputs={"acausal": {"w": "inertia.w", "i": "inductor.i"},
              "ode": {"w": "w", "i": "i"},
+             "inputs": {"w": "inertia.w", "i": "inductor.i"},
              "blocks": {"w": "speed.y", "i": "current.y"}},
     output_units={"w": "rad/s", "i": "A"},
     experiment=Experiment(t_stop=0.5, rtol=1e-8, atol=1e-10),
