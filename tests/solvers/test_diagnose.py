@@ -52,3 +52,19 @@ def test_the_replay_finds_the_first_broken_operation_and_what_it_reaches():
     assert first_nonfinite(f, [4.0]) is None
     # a non-finite input is no operation's fault
     assert first_nonfinite(f, [np.nan]) is None
+
+
+class LogInALoop(mt.Component):
+    x = mt.Variable("1", start=-1.0, doc="Negative from the start")
+    y = mt.Variable("1", doc="log(x): not finite")
+    z = mt.Variable("1", start=1.0, doc="Algebraic: z^3 + z = y")
+
+    def equations(self):
+        return [mt.der(self.x) == -1.0, self.y == ca.log(self.x),
+                self.z ** 3 + self.z == self.y]
+
+
+def test_a_dae_solver_failing_at_the_start_names_the_equation():
+    with pytest.raises(SimulationError, match=r"At the start: the algebraic equation solved "
+                                              r"for z: log of a negative number, log\(-1\)"):
+        mt.simulate(LogInALoop(), 1.0, solver="idas")

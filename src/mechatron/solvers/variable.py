@@ -131,11 +131,33 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     try:
         sol = integ(x0=np.concatenate([X0, np.zeros(1 if cm.nX == 0 else 0)]), z0=z0, p=p)
     except RuntimeError as exc:
-        raise SimulationError(_explain(cm, str(exc)), path=cm.name) from None
+        cause = _nonfinite_cause(cm, float(grid[0]), X0, z0, p, drive)
+        raise SimulationError(_explain(cm, str(exc)) + (f" At the start: {cause}." if cause
+                                                        else ""), path=cm.name) from None
     X = np.array(sol["xf"], dtype=float)[:cm.nX].reshape(cm.nX, grid.size)
     Z = np.array(sol["zf"], dtype=float).reshape(cm.nz, grid.size)
     stats = integ.stats()
     return X, Z, stats, plugin
+
+
+def _nonfinite_cause(cm: CompiledModel, t0: float, X0, z0, p, drive) -> str:
+    """Which equation gives a value that is not finite at the start point, if one does
+    (replayed from the compiled functions; "" when none does or inputs drive ``p``)."""
+    if drive:
+        return ""
+    from mechatron.solvers.diagnose import describe_nonfinite
+    args = [t0, np.asarray(X0, dtype=float), np.asarray(z0, dtype=float),
+            np.asarray(p, dtype=float)]
+    for f, names in ((cm.f_ode, [f"der({n})" for n in cm.state_names]),
+                     (cm.f_alg, [f"the algebraic equation solved for {n}"
+                                 for n in cm.alg_names]),
+                     (cm.f_out, cm.names)):
+        if f is None or f.n_out() == 0 or f.nnz_out(0) == 0:
+            continue
+        cause = describe_nonfinite(f, args, names, t0)
+        if cause:
+            return cause
+    return ""
 
 
 def _explain(cm: CompiledModel, text: str) -> str:
