@@ -26,9 +26,8 @@ from _common import log, main, ratio, repeat, summary
 import numpy as np
 
 import mechatron as mt
+from bench_scaling import C_SHUNT, R_SERIES, V_SOURCE, rc_ladder
 from mechatron.library import electrical as el
-
-R_SERIES, C_SHUNT, V_SOURCE = 1.0, 1e-3, 1.0
 
 
 class Stage(mt.Component):
@@ -48,19 +47,8 @@ class Stage(mt.Component):
 
 
 def flat_ladder(n: int) -> mt.System:
-    m = mt.System(f"flat_{n}")
-    src = m.add("src", el.DCVoltageSource(V=V_SOURCE))
-    gnd = m.add("gnd", el.ElectricalReference())
-    m.connect(src.n, gnd.port)
-    node = src.p
-    for k in range(n):
-        r = m.add(f"r{k}", el.Resistor(R=R_SERIES))
-        c = m.add(f"c{k}", el.Capacitor(C=C_SHUNT))
-        m.connect(node, r.p)
-        m.connect(r.n, c.p)
-        m.connect(c.n, gnd.port)
-        node = r.n
-    return m
+    """The flat ladder of bench_scaling (the same parts and values)."""
+    return rc_ladder(n)
 
 
 def stage_ladder(n: int) -> mt.System:

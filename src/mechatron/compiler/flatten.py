@@ -368,24 +368,31 @@ def _check_range(el, key, decl, value, problems) -> None:
                      f"{el.describe()}: {key} must be <= {decl.max:g}, got {value:g}.")
 
 
+def _class_calls(el, method: str, where: str):
+    """``(klass, result)`` of each class's own ``method`` (``equations``,
+    ``initial_equations``) on ``el``, parents first, each class once (Modelica's
+    ``extends``); a failure inside is a ModelError naming the component and class."""
+    for klass in reversed(type(el).__mro__):
+        own = vars(klass).get(method)
+        if own is None or klass is Component:
+            continue
+        try:
+            items = own(el)
+        except ModelError:
+            raise
+        except Exception as exc:
+            raise ModelError(f"{el.describe()}: {klass.__name__}.{method}() failed: "
+                             f"{type(exc).__name__}: {exc}", path=where) from exc
+        yield klass, items
+
+
 def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connect, str]]:
     connects = []
     for el in elements:
         if not isinstance(el, Component):
             continue
         where = el.path or flat.name
-        # parents first, each class's own equations once
-        for klass in reversed(type(el).__mro__):
-            own = vars(klass).get("equations")
-            if own is None or klass is Component:
-                continue
-            try:
-                items = own(el)
-            except ModelError:
-                raise
-            except Exception as exc:
-                raise ModelError(f"{el.describe()}: {klass.__name__}.equations() failed: "
-                                 f"{type(exc).__name__}: {exc}", path=where) from exc
+        for klass, items in _class_calls(el, "equations", where):
             if klass is type(el):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
             for k, item in enumerate(_as_equations(items)):
@@ -751,18 +758,7 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     for el in elements:
         if not isinstance(el, Component):
             continue
-        for klass in reversed(type(el).__mro__):
-            own = vars(klass).get("initial_equations")
-            if own is None or klass is Component:
-                continue
-            try:
-                items = own(el)
-            except ModelError:
-                raise
-            except Exception as exc:
-                raise ModelError(f"{el.describe()}: {klass.__name__}.initial_equations() "
-                                 f"failed: {type(exc).__name__}: {exc}",
-                                 path=el.path) from exc
+        for klass, items in _class_calls(el, "initial_equations", el.path):
             for k, item in enumerate(_as_equations(items)):
                 before = len(flat.equations)
                 _add_equation(flat, el, klass, k, item, problems)

@@ -31,15 +31,14 @@ from mechatron.library.rotational.interfaces import Flange
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
 
-__all__ = ["MotorAxis", "TwoAxisTable", "TwoAxisODE", "ENTRY"]
+__all__ = ["AxisConstants", "MotorAxis", "TwoAxisTable", "TwoAxisODE", "ENTRY"]
 
 SEED = "seed table 6-1, calculated"
 CHOSEN = "chosen: a light load per axis"
 
 
-class MotorAxis(mt.Component):
-    """One axis: a permanent-magnet DC motor rigidly driving a load inertia with viscous
-    load friction; the motor's constants are the axis's parameters."""
+class AxisConstants(mt.Component, partial=True):
+    """The constants of one axis: the seed motor and its load."""
 
     R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
     L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
@@ -49,13 +48,21 @@ class MotorAxis(mt.Component):
     J_load = mt.Parameter("kg*m^2", default=1e-5, min=0, doc="Load inertia")
     D_load = mt.Parameter("N*m*s/rad", default=5e-5, min=0, doc="Load viscous friction")
 
+
+class MotorAxis(AxisConstants):
+    """One axis: a permanent-magnet DC motor rigidly driving a load inertia with viscous
+    load friction; the motor's constants are the axis's parameters."""
+
     p = Pin(doc="Positive armature terminal")
     n = Pin(doc="Negative armature terminal")
     support = Flange(doc="Frame of the axis")
 
-    motor = machines.DCPermanentMagnet(R=R, L=L, k=k, J=J, B_v=B)
-    load = rot.Inertia(J=J_load)
-    load_friction = rot.RotationalDamper(D=D_load)
+    # inherited parameters, passed on (a class body sees only its own names)
+    c = AxisConstants
+    motor = machines.DCPermanentMagnet(R=c.R, L=c.L, k=c.k, J=c.J, B_v=c.B)
+    load = rot.Inertia(J=c.J_load)
+    load_friction = rot.RotationalDamper(D=c.D_load)
+    del c
 
     def equations(self):
         return [mt.connect(self.p, self.motor.p), mt.connect(self.motor.n, self.n),
@@ -80,18 +87,11 @@ class TwoAxisTable(mt.Component):
                 mt.connect(self.x.support, self.y.support, self.frame.port)]
 
 
-class TwoAxisODE(mt.Component):
-    """Both axes as equations."""
+class TwoAxisODE(AxisConstants):
+    """Both axes as equations (both with the same constants)."""
 
     V_x = mt.Parameter("V", default=19.2, doc="Supply voltage of axis x")
     V_y = mt.Parameter("V", default=12.0, doc="Supply voltage of axis y")
-    R = mt.Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
-    L = mt.Parameter("H", default=3.408e-4, min=0, doc="Armature inductance")
-    k = mt.Parameter("V*s/rad", default=0.151, min=0, doc="Motor constant")
-    J = mt.Parameter("kg*m^2", default=4.8e-6, min=0, doc="Rotor inertia")
-    B = mt.Parameter("N*m*s/rad", default=1.236e-4, min=0, doc="Bearing friction")
-    J_load = mt.Parameter("kg*m^2", default=1e-5, min=0, doc="Load inertia")
-    D_load = mt.Parameter("N*m*s/rad", default=5e-5, min=0, doc="Load viscous friction")
     i_x = mt.Variable("A", start=0.0, doc="Armature current, axis x")
     w_x = mt.Variable("rad/s", start=0.0, doc="Speed, axis x")
     i_y = mt.Variable("A", start=0.0, doc="Armature current, axis y")
