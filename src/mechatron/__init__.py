@@ -3,15 +3,30 @@ mechatronic systems.
 
 >>> import mechatron as mt
 >>> res = mt.simulate(mt.models.get("dc_motor").build(), 0.5)
+
+``import mechatron`` loads the modeling language only; the compiler, the solvers, the
+component library, the model database and the applications (codegen, estimation, realtime,
+report, viz) are imported on first use of their name (``mt.simulate``,
+``mt.library.electrical``, ``mt.models.get``, ...), and pint, SciPy, pandas and matplotlib
+when a function needs them.
 """
 
-from mechatron.compiler import CompiledModel, compile_model
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+from mechatron import errors
 from mechatron.core import (Across, Component, Connector, Domain, Input, Output, Parameter,
                             Start, System, Through, Variable, connect, der, if_else)
 from mechatron.core.events import Clock, sample, when
 from mechatron.results import SimResult, SolverStats
-from mechatron.solvers import simulate
-from mechatron import errors, library, models  # noqa: E402  (public subpackages)
+
+if TYPE_CHECKING:
+    from mechatron import (cli, codegen, compiler, core, estimation, library, models,
+                           realtime, report, results, solvers, units, viz)
+    from mechatron.compiler import CompiledModel, compile_model
+    from mechatron.solvers import simulate
 
 __version__ = "0.1.0"
 
@@ -20,3 +35,28 @@ __all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable"
            "Clock", "sample", "when",
            "compile_model", "CompiledModel", "simulate", "SimResult", "SolverStats",
            "library", "models"]
+
+#: Public names imported on first access: name -> module that defines it.
+_LAZY_NAMES = {"compile_model": "mechatron.compiler",
+               "CompiledModel": "mechatron.compiler",
+               "simulate": "mechatron.solvers"}
+
+#: Subpackages reachable as attributes (``mt.library``, ``mt.codegen``) before an import.
+_SUBMODULES = frozenset({"cli", "codegen", "compiler", "core", "estimation", "library",
+                         "models", "realtime", "report", "results", "solvers", "units",
+                         "viz"})
+
+
+def __getattr__(name: str):
+    if name in _LAZY_NAMES:
+        value = getattr(importlib.import_module(_LAZY_NAMES[name]), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f"{__name__}.{name}")
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value     # later accesses are plain attribute lookups
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY_NAMES) | _SUBMODULES)

@@ -4,27 +4,42 @@ Mechatron keeps runtime values as SI floats. Users may give a parameter as a num
 as SI), a string such as ``"340 uH"`` or ``"1500 rpm"``, or a pint quantity; the value is
 converted to the declared unit of the parameter, and a value of the wrong dimension is an
 error naming the parameter.
+
+pint and its registry are loaded on first use (``import mechatron`` does not pay for them):
+``ureg`` is a module attribute built by the first access.
 """
 
 from __future__ import annotations
 
 import functools
 import numbers
-
-import pint
+from typing import TYPE_CHECKING
 
 from mechatron.errors import UnitError
 
+if TYPE_CHECKING:
+    import pint
+
 __all__ = ["ureg", "to_si", "check_unit", "dimensionality"]
 
-ureg = pint.UnitRegistry()
-ureg.define("@alias ohm = Ohm")  # the capitalised spelling engineers write
-_Q = ureg.Quantity
+
+@functools.lru_cache(maxsize=None)
+def _registry() -> pint.UnitRegistry:
+    import pint
+    registry = pint.UnitRegistry()
+    registry.define("@alias ohm = Ohm")  # the capitalised spelling engineers write
+    return registry
+
+
+def __getattr__(name: str):
+    if name == "ureg":
+        return _registry()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @functools.lru_cache(maxsize=None)
 def _unit(unit: str) -> pint.Unit:
-    return ureg.Unit(unit or "dimensionless")
+    return _registry().Unit(unit or "dimensionless")
 
 
 def check_unit(unit: str, where: str = "") -> str:
@@ -61,11 +76,12 @@ def to_si(value, unit: str, where: str) -> float:
         return float(value)
     if isinstance(value, str):
         try:
-            value = _Q(value)
+            value = _registry().Quantity(value)
         except Exception:
             raise UnitError(f"{where}: cannot read {value!r} as a quantity. "
                             f"Write a number and a unit, e.g. '1.5 {unit or ''}'.".rstrip(),
                             path=where) from None
+    import pint
     if isinstance(value, pint.Quantity):
         target = _unit(unit)
         if value.dimensionality != target.dimensionality:
