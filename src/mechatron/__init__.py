@@ -14,18 +14,18 @@ when a function needs them.
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING
 
 from mechatron import errors
 from mechatron.core import (Across, Component, Connector, Domain, Input, Output, Parameter,
                             Start, System, Through, Variable, connect, der, if_else)
 from mechatron.core.events import Clock, sample, when
-from mechatron.results import SimResult, SolverStats
 
+TYPE_CHECKING = False       # typing.TYPE_CHECKING without importing typing
 if TYPE_CHECKING:
     from mechatron import (cli, codegen, compiler, core, estimation, library, models,
                            realtime, report, results, solvers, units, viz)
     from mechatron.compiler import CompiledModel, compile_model
+    from mechatron.results import SimResult, SolverStats
     from mechatron.solvers import simulate
 
 __version__ = "0.1.0"
@@ -39,7 +39,9 @@ __all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable"
 #: Public names imported on first access: name -> module that defines it.
 _LAZY_NAMES = {"compile_model": "mechatron.compiler",
                "CompiledModel": "mechatron.compiler",
-               "simulate": "mechatron.solvers"}
+               "simulate": "mechatron.solvers",
+               "SimResult": "mechatron.results",
+               "SolverStats": "mechatron.results"}
 
 #: Subpackages reachable as attributes (``mt.library``, ``mt.codegen``) before an import.
 _SUBMODULES = frozenset({"cli", "codegen", "compiler", "core", "estimation", "library",

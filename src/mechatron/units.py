@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import functools
 import numbers
-from typing import TYPE_CHECKING
 
 from mechatron.errors import UnitError
 
+TYPE_CHECKING = False       # typing.TYPE_CHECKING without importing typing
 if TYPE_CHECKING:
     import pint
 
