@@ -54,14 +54,14 @@ def _clock_hz() -> float | None:
 
 
 def _one(cm, solver: str, iterations: int, dt: float, steps: int, out: Path,
-         clock: float | None) -> dict:
+         clock: float | None, repeats: int = 7) -> dict:
     prep = prepare(cm, solver=solver, dt=dt, iterations=iterations)
     prof = operation_profile(prep.step)
     t0 = time.perf_counter()
     code = generate_c(cm, out, solver=solver, dt=dt, iterations=iterations)
     build(code)
     build_s = time.perf_counter() - t0
-    timing = measure_ns_per_step(code, steps=steps, repeats=7)
+    timing = measure_ns_per_step(code, steps=steps, repeats=repeats)
     cycles = max(prof["latency_cycles"], prof["issue_cycles"])
     limit = cycles / clock * 1e9 if clock else None
     return {"solver": solver, "iterations": iterations if solver not in ("euler", "heun", "rk4")
@@ -114,14 +114,14 @@ def hand_written_peer(cm, generated_harness: Path, steps: int, repeats: int,
             "hand_state_after": hand[-1]["x"], "repeats": repeats, "steps": steps}
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Time the generated C of every database model."""
-    steps = 100_000 if quick else 1_000_000
+    steps = 1000 if tiny else 100_000 if quick else 1_000_000
     clock = _clock_hz()
     rows, peer = {}, None
     with tempfile.TemporaryDirectory(prefix="mechatron_bench_codegen_") as tmp:
         for entry in mt.models.list():
-            if quick and entry.name != "dc_motor":
+            if (quick or tiny) and entry.name != "dc_motor":
                 continue
             log(f"codegen {entry.name}")
             try:
@@ -130,15 +130,16 @@ def run(quick: bool = False) -> dict:
                 configs = [("rk4", 1)]
                 if entry.name == "dc_motor":
                     dt = 1e-4
-                    configs += [("backward_euler", 2), ("ode14x", 1)]
+                    configs += [] if tiny else [("backward_euler", 2), ("ode14x", 1)]
                 rows[entry.name] = [
-                    _one(cm, s, it, dt, steps, Path(tmp) / f"{entry.name}_{s}", clock)
+                    _one(cm, s, it, dt, steps, Path(tmp) / f"{entry.name}_{s}", clock,
+                         1 if tiny else 7)
                     for s, it in configs]
                 if entry.name == "dc_motor":
                     log("codegen dc_motor: hand-written C peer")
                     peer = hand_written_peer(
                         cm, Path(tmp) / "dc_motor_rk4" / "dc_motor_run", steps,
-                        8 if quick else 24, Path(tmp))
+                        1 if tiny else 8 if quick else 24, Path(tmp))
             except Exception as exc:      # one model that cannot be generated: report it
                 rows[entry.name] = {"error": f"{type(exc).__name__}: {exc}"}
     dc = rows.get("dc_motor")

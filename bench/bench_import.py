@@ -57,9 +57,9 @@ def measure(code: str) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Seconds and modules of ``import mechatron``, ``import casadi`` and an eager import."""
-    repeats = 3 if quick else 9
+    repeats = 1 if tiny else 3 if quick else 9
     runs = {name: [] for name in CASES}
     for _ in range(repeats):
         for name, code in CASES.items():
