@@ -90,7 +90,8 @@ def hand_written_peer(cm, generated_harness: Path, steps: int, repeats: int,
                       tmp: Path) -> dict:
     """Build ``bench/c/dc_motor_rk4.c`` with the generated Makefile's flags and time it
     in turns with the generated harness (``repeats`` runs each over the environment
-    paddings ``PADS``, best of each)."""
+    paddings ``PADS``; each run times ten chunks of ``steps / 10``; the fastest chunk of
+    all runs counts, which is what preemptions on a loaded machine leave of the cost)."""
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         return {"error": "no C compiler"}
@@ -103,14 +104,14 @@ def hand_written_peer(cm, generated_harness: Path, steps: int, repeats: int,
         pad = PADS[k % len(PADS)]
         hand.append(_bench_json([str(exe), *params, str(steps)], pad))
         gen.append(_bench_json([str(generated_harness), "--bench", str(steps)], pad))
-    best_hand = min(r["ns_per_step"] for r in hand)
-    best_gen = min(r["ns_per_step"] for r in gen)
+    best_hand = min(r["best_chunk_ns_per_step"] for r in hand)
+    best_gen = min(r["best_chunk_ns_per_step"] for r in gen)
     return {"hand_ns_per_step": best_hand, "generated_ns_per_step": best_gen,
             "ratio_generated_over_hand": best_gen / best_hand,
             "goal_ratio": GOAL_RATIO_TO_HAND,
             "goal_met": best_gen / best_hand < GOAL_RATIO_TO_HAND,
-            "hand_all_ns": [r["ns_per_step"] for r in hand],
-            "generated_all_ns": [r["ns_per_step"] for r in gen],
+            "hand_all_ns": [r["best_chunk_ns_per_step"] for r in hand],
+            "generated_all_ns": [r["best_chunk_ns_per_step"] for r in gen],
             "hand_state_after": hand[-1]["x"], "repeats": repeats, "steps": steps}
 
 
@@ -139,7 +140,7 @@ def run(quick: bool = False, tiny: bool = False) -> dict:
                     log("codegen dc_motor: hand-written C peer")
                     peer = hand_written_peer(
                         cm, Path(tmp) / "dc_motor_rk4" / "dc_motor_run", steps,
-                        1 if tiny else 8 if quick else 24, Path(tmp))
+                        1 if tiny else 16 if quick else 32, Path(tmp))
             except Exception as exc:      # one model that cannot be generated: report it
                 rows[entry.name] = {"error": f"{type(exc).__name__}: {exc}"}
     dc = rows.get("dc_motor")
