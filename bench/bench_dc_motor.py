@@ -85,9 +85,10 @@ def _integrator_only(cm, t_out, n: int) -> dict | None:
     return summary(times)
 
 
-def _rodas4_runs(cm, t_out, n: int) -> dict:
+def _rodas4_runs(cm, t_out, n: int, fresh_build: bool = True) -> dict:
     """``mt.simulate(solver="rodas4")``: the C build in an empty cache folder, then the
-    median of repeated calls (the library loaded)."""
+    median of repeated calls (the library loaded). ``fresh_build=False`` (the tests'
+    tiny run) uses the user's cache instead of an empty one."""
     import os
     import tempfile
 
@@ -96,8 +97,9 @@ def _rodas4_runs(cm, t_out, n: int) -> dict:
 
     saved = os.environ.get("MECHATRON_CACHE")
     with tempfile.TemporaryDirectory() as tmp:
-        os.environ["MECHATRON_CACHE"] = tmp
-        cm._cache.pop("native_rodas4", None)
+        if fresh_build:
+            os.environ["MECHATRON_CACHE"] = tmp
+            cm._cache.pop("native_rodas4", None)
         try:
             res, build = clock(sim)
         finally:
@@ -105,7 +107,7 @@ def _rodas4_runs(cm, t_out, n: int) -> dict:
                 os.environ.pop("MECHATRON_CACHE", None)
             else:
                 os.environ["MECHATRON_CACHE"] = saved
-        res, times = repeat(sim, max(n, 25))
+        res, times = repeat(sim, max(n, 25) if fresh_build else n)
     st = res.stats
     log(f"dc_motor mechatron rodas4: build {build * 1e3:.0f} ms, "
         f"median {summary(times)['median_s'] * 1e6:.0f} us")
@@ -115,9 +117,9 @@ def _rodas4_runs(cm, t_out, n: int) -> dict:
                       "jac_evals": st.jac_evals}}
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """DC motor: Mechatron simulate vs SciPy solve_ivp (LSODA, BDF), same ODE, same rtol."""
-    n_rep = 5 if quick else 15
+    n_rep = 1 if tiny else 5 if quick else 15
     entry = mt.models.get("dc_motor")
     P = entry.values()
     w_inf = P["k"] * P["V"] / (P["R"] * P["B"] + P["k"] ** 2)
@@ -149,7 +151,7 @@ def run(quick: bool = False) -> dict:
     _, t_prof, where = profiled(sim)
     alternative = logging_alternative(cm, res, t_out)
 
-    rodas = _rodas4_runs(cm, t_out, n_rep)
+    rodas = _rodas4_runs(cm, t_out, n_rep, fresh_build=not tiny)
     r_res = rodas.pop("result")
     scipy_res = _scipy_runs(P, t_out, n_rep)
 

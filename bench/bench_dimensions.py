@@ -69,10 +69,10 @@ def _one(n: int, repeats: int) -> dict:
     return row
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Time of the dimension pass and its share of compile time on the RC ladder."""
-    sizes = (100, 1000) if quick else (1000, 10000)
-    rows = [_one(n, 1 if n >= 10000 else 3) for n in sizes]
+    sizes = (10,) if tiny else (100, 1000) if quick else (1000, 10000)
+    rows = [_one(n, 1 if n >= 10000 or tiny else 3) for n in sizes]
     return {"casadi": ca.__version__, "goal_share": 0.10, "rows": rows}
 
 

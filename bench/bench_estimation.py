@@ -87,7 +87,7 @@ def _scipy_residuals(x, runs, fixed, scales):
     return np.concatenate(res)
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Estimation wall time and Monte Carlo throughput, Mechatron against SciPy."""
     bench = VirtualBench(seed=0)
     runs = [bench.multi_step(), bench.locked_rotor()]
@@ -149,16 +149,16 @@ def run(quick: bool = False) -> dict:
                              outputs={"i": "i", "w": "rate(phi)"}, offsets=["i"])
     dists = {n: Distribution("uniform", 0.7 * TABLE_6_1[n], 1.3 * TABLE_6_1[n])
              for n in names}
-    n = 16 if quick else 64
+    n = 4 if tiny else 16 if quick else 64
     mc = {}
-    for workers in (1, None):
+    for workers in ((1,) if tiny else (1, None)):
         r = run_sensitivity(prob, dists, n=n, method="sobol", workers=workers)
         mc["workers_" + str(r.workers)] = {"simulations": r.evaluations,
                                            "wall_s": r.wall_time,
                                            "simulations_per_s": r.throughput}
         log(f"mechatron monte carlo, {r.workers} worker(s): {r.throughput:.0f} sims/s")
     rng = np.random.default_rng(0)
-    m = 10 if quick else 40
+    m = 2 if tiny else 10 if quick else 40
     t0 = time.perf_counter()
     for _ in range(m):
         theta = np.array([TABLE_6_1[nm] for nm in names]) * rng.uniform(0.7, 1.3, 6)

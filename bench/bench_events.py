@@ -39,10 +39,10 @@ class Chained(mt.Component):
                                                (self.resets, self.resets + 1)])]
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Microseconds per event of a chained event iteration, per solver."""
     cm, t_compile = clock(mt.compile_model, Chained())
-    t_stop = 0.2 if quick else 1.0
+    t_stop = 0.02 if tiny else 0.2 if quick else 1.0
     _, build = clock(mt.simulate, cm, 0.01, solver="rodas4")
     rows = []
     for solver, dt in (("auto", None), ("rodas4", None), ("euler", T / 4)):

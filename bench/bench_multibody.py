@@ -79,11 +79,11 @@ def _case(name, build, t_stop, rtol, atol, baseline, y0, angle_of, n_rep, scipy_
     return out
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Compile and simulate the double pendulum and the four-bar; SciPy baselines."""
-    n_rep = 2 if quick else 5
-    t_dp = 2.0 if quick else 10.0
-    t_fb = 2.0 if quick else 10.0
+    n_rep = 1 if tiny else 2 if quick else 5
+    t_dp = 0.1 if tiny else 2.0 if quick else 10.0
+    t_fb = t_dp
     methods = ["DOP853"] if quick else ["DOP853", "RK45", "LSODA"]
     dp = _case("double_pendulum", mech.double_pendulum, t_dp, 1e-10, 1e-10,
                double_pendulum_rhs, [math.pi / 2, 0.0, 0.0, 0.0],

@@ -194,9 +194,9 @@ def _exponents(rows: list[dict], key, same_grid: bool = False) -> list[dict]:
     return out
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Compile-time and simulation scaling (RC ladder, mass-spring chain) and SciPy baseline."""
-    sizes = [n for n in SIZES if not (quick and n >= 10000)]
+    sizes = [5, 10] if tiny else [n for n in SIZES if not (quick and n >= 10000)]
     out = {"benchmark": "scaling",
            "settings": {"sizes": sizes, "t_stop_s": T_STOP, "rtol": RTOL, "atol": ATOL,
                         "solver": "cvodes", "output_points": N_OUT,
@@ -211,7 +211,7 @@ def run(quick: bool = False) -> dict:
         for n in sizes:
             gc.collect()
             row, final, grid = measure(kind, n, simulate_twice=n < (1000 if quick else 10000),
-                                       compiles=_compile_repeats(n, quick))
+                                       compiles=1 if tiny else _compile_repeats(n, quick))
             if kind == "rc_ladder":
                 base = scipy_rc_ladder(n, grid, repeats=3 if n <= 100 else 1)
                 mech = row.get("simulate_second_s", row["simulate_first_s"])

@@ -81,10 +81,10 @@ def _compile(build, n, repeats):
     return cm, summary(times), summary(cpu), counts
 
 
-def run(quick: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False) -> dict:
     """Compile time of a reused subsystem against the flat model (issue 15)."""
-    sizes = (100,) if quick else (100, 1000)
-    repeats = 3 if quick else 5
+    sizes = (5,) if tiny else (100,) if quick else (100, 1000)
+    repeats = 1 if tiny else 3 if quick else 5
     rows = []
     for n in sizes:
         log(f"subsystems: N = {n}")

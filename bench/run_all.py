@@ -5,8 +5,10 @@
     python bench/run_all.py --only dc_motor --out bench/out/latest.json
 
 Timings are printed, never asserted. Progress goes to stderr; stdout is the JSON document:
-``environment`` (versions, machine, load), ``summary`` (the headline figures) and
-``benchmarks`` (each benchmark's full output). See bench/README.md for how to read it.
+``environment`` (versions, machine, load), ``summary`` (the headline figures),
+``table`` (each headline figure beside its peer measured in the same run, the ratio and
+the goal an issue states) and ``benchmarks`` (each benchmark's full output). The table is
+also printed on stderr at the end. See bench/README.md for how to read it.
 """
 
 from __future__ import annotations
@@ -24,15 +26,26 @@ import bench_codegen
 import bench_dc_motor
 import bench_dimensions
 import bench_estimation
+import bench_events
+import bench_import
 import bench_multibody
 import bench_pwm
 import bench_realtime
 import bench_scaling
+import bench_subsystems
 
-BENCHMARKS = {"dc_motor": bench_dc_motor.run, "pwm": bench_pwm.run, "scaling": bench_scaling.run,
+BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
+              "pwm": bench_pwm.run, "scaling": bench_scaling.run,
               "codegen": bench_codegen.run, "realtime": bench_realtime.run,
               "multibody": bench_multibody.run, "estimation": bench_estimation.run,
-              "dimensions": bench_dimensions.run}
+              "dimensions": bench_dimensions.run, "subsystems": bench_subsystems.run,
+              "events": bench_events.run}
+
+#: Goals of issue 17 for the RC ladder: compile seconds by N, and simulation at least
+#: twice as fast as the SciPy peer (ratio peer / Mechatron >= 2) at these N.
+LADDER_COMPILE_GOAL_S = {1000: 0.5, 10000: 5.0, 100000: 60.0}
+LADDER_SIMULATE_GOAL_RATIO = 2.0
+LADDER_SIMULATE_GOAL_N = (1000, 10000)
 
 
 def _summary(results: dict) -> dict:
@@ -109,6 +122,197 @@ def _summary(results: dict) -> dict:
     return out
 
 
+def _row(figure: str, unit: str, value, peer: str | None = None, peer_value=None,
+         ratio=None, goal: str | None = None, met: bool | None = None) -> dict:
+    return {"figure": figure, "unit": unit, "mechatron": value, "peer": peer,
+            "peer_value": peer_value, "ratio_peer_over_mechatron": ratio, "goal": goal,
+            "goal_met": met}
+
+
+def _rows_import(r: dict) -> list[dict]:
+    c = r["cases"]
+    mech = r["import_mechatron_s"]
+    return [_row("import mechatron", "s", mech, "import casadi", c["casadi"]["best_s"],
+                 c["casadi"]["best_s"] / mech, f"< {r['goal_s']} s (issue 17)",
+                 r["goal_met"]),
+            _row("import mechatron: modules", "", c["mechatron"]["modules"],
+                 "former eager import", c["mechatron_eager"]["modules"],
+                 c["mechatron_eager"]["modules"] / c["mechatron"]["modules"])]
+
+
+def _rows_dc_motor(r: dict) -> list[dict]:
+    mech = r["mechatron"]["simulate"]["median_s"]
+    rodas = r["mechatron_rodas4"]
+    lsoda = r["scipy"]["scipy_LSODA"]
+    rows = [_row("DC motor 0.5 s, simulate (cvodes)", "s", mech, "SciPy LSODA",
+                 lsoda["time"]["median_s"], lsoda["ratio_scipy_over_mechatron"],
+                 "ratio >= 10 (issue 17)", lsoda["ratio_scipy_over_mechatron"] >= 10),
+            _row("DC motor 0.5 s, simulate (rodas4)", "s", rodas["simulate"]["median_s"],
+                 "SciPy LSODA", lsoda["time"]["median_s"],
+                 lsoda["ratio_scipy_over_mechatron_rodas4"], "ratio >= 10 (issue 17)",
+                 lsoda["ratio_scipy_over_mechatron_rodas4"] >= 10),
+            _row("DC motor, first rodas4 run (C build)", "s", rodas["build_s"],
+                 goal="< 2 s (issue 17)", met=rodas["build_s"] < 2.0),
+            _row("DC motor compile", "s", r["compile_acausal"]["time"]["median_s"])]
+    return rows
+
+
+def _rows_scaling(r: dict) -> list[dict]:
+    rows = []
+    for row in r["models"]["rc_ladder"]["rows"]:
+        n = row["N"]
+        goal = LADDER_COMPILE_GOAL_S.get(n)
+        rows.append(_row(f"RC ladder N={n} compile", "s", row["compile_s"],
+                         goal=f"< {goal} s (issue 17)" if goal else None,
+                         met=row["compile_s"] < goal if goal else None))
+        mech = row.get("simulate_second_s", row["simulate_first_s"])
+        base = row["scipy_bdf_sparse"]
+        ratio = base["ratio_scipy_over_mechatron_simulate"]
+        wants = n in LADDER_SIMULATE_GOAL_N
+        rows.append(_row(f"RC ladder N={n} simulate", "s", mech,
+                         "SciPy BDF, sparse Jacobian", base["time"]["median_s"], ratio,
+                         f"ratio >= {LADDER_SIMULATE_GOAL_RATIO:g} (issue 17)" if wants
+                         else None,
+                         (ratio or 0) >= LADDER_SIMULATE_GOAL_RATIO if wants else None))
+    return rows
+
+
+def _rows_pwm(r: dict) -> list[dict]:
+    auto = [x for x in r["rows"] if x["solver"] != "rodas4"]
+    rodas = [x for x in r["rows"] if x["solver"] == "rodas4"]
+    return [_row(f"PWM motor {auto[-1]['t_stop_s']:g} s, per event (auto)", "us",
+                 auto[-1]["us_per_event"], "rodas4 (compiled C)", rodas[-1]["us_per_event"],
+                 rodas[-1]["us_per_event"] / auto[-1]["us_per_event"]),
+            _row("PWM motor, us/event growth over durations (auto)", "",
+                 r["us_per_event_growth_auto"], "rodas4", r["us_per_event_growth_rodas4"],
+                 goal="about 1 (linear in events)")]
+
+
+def _rows_codegen(r: dict) -> list[dict]:
+    hand = r["hand_written"]
+    rows = [_row("generated C, DC motor RK4 step", "ns", hand["generated_ns_per_step"],
+                 "hand-written C", hand["hand_ns_per_step"],
+                 hand["hand_ns_per_step"] / hand["generated_ns_per_step"],
+                 f"generated / hand < {hand['goal_ratio']} (issue 17)", hand["goal_met"])]
+    if r["dc_motor_rk4_ns"] is not None:
+        rows.append(_row("generated C, DC motor RK4 step (harness, best of 7)", "ns",
+                         r["dc_motor_rk4_ns"], goal=f"< {r['goal_ns']:g} ns",
+                         met=r["goal_met"]))
+    return rows
+
+
+def _rows_realtime(r: dict) -> list[dict]:
+    if "skipped" in r:
+        return []
+    ol = r["open_loop_10khz"]
+    return [_row("realtime runner 10 kHz, median step", "s", ol["median_step_time_s"]),
+            _row("realtime runner 10 kHz, overruns", "", ol["overruns"], goal="0",
+                 met=ol["overruns"] == 0),
+            _row("SIL over UDP 10 kHz, overruns", "", r["sil_udp_10khz"]["overruns"],
+                 goal="0", met=r["sil_udp_10khz"]["overruns"] == 0)]
+
+
+def _rows_multibody(r: dict) -> list[dict]:
+    rows = []
+    for case in ("double_pendulum", "four_bar"):
+        mech = r[case]["mechatron"]["simulate"]["median_s"]
+        name, best = min(((n, b) for n, b in r[case]["scipy"].items() if "time" in b),
+                         key=lambda nb: nb[1]["time"]["median_s"])
+        rows.append(_row(f"{case} simulate", "s", mech, f"SciPy {name[6:]}",
+                         best["time"]["median_s"], best["ratio_scipy_over_mechatron"]))
+    return rows
+
+
+def _rows_estimation(r: dict) -> list[dict]:
+    mech = r["mechatron"]["wall_s_second"]
+    base = r["scipy_least_squares_fd"]
+    mc = r["monte_carlo"]
+    best = max(v["simulations_per_s"] for k, v in mc.items() if k.startswith("workers"))
+    return [_row("estimation, 7 parameters", "s", mech,
+                 "SciPy least_squares on solve_ivp" if "wall_s" in base else None,
+                 base.get("wall_s"), base.get("ratio_scipy_over_mechatron"),
+                 "< 5 s", mech < 5.0),
+            _row("Monte Carlo throughput", "sims/s", best, "SciPy solve_ivp loop",
+                 mc["scipy_solve_ivp_loop"]["simulations_per_s"],
+                 mc["ratio_mechatron_over_scipy"])]
+
+
+def _rows_dimensions(r: dict) -> list[dict]:
+    last = r["rows"][-1]
+    share = last["share_of_compile"]["median"]
+    return [_row(f"dimension check, share of compile (N={last['n']})", "", share,
+                 goal=f"<= {r['goal_share']:g}", met=share <= r["goal_share"])]
+
+
+def _rows_subsystems(r: dict) -> list[dict]:
+    last = r["rows"][-1]
+    ratio = last["ratio_subsystem_over_flat"]
+    return [_row(f"compile, reused subsystem N={last['N']}", "s",
+                 last["subsystem_compile"]["median_s"], "flat model",
+                 last["flat_compile"]["median_s"], last["flat_compile"]["median_s"] /
+                 last["subsystem_compile"]["median_s"],
+                 "subsystem / flat <= 1.2 (issue 15)", (ratio or 0) <= 1.2)]
+
+
+def _rows_events(r: dict) -> list[dict]:
+    by = {x["solver"]: x for x in r["rows"]}
+    auto = next(x for s, x in by.items() if s not in ("rodas4", "euler"))
+    rodas = by.get("rodas4", auto)
+    return [_row("chained events (sample, when, reinit), per event (auto)", "us",
+                 auto["us_per_event"], "rodas4 (compiled C)", rodas["us_per_event"],
+                 rodas["us_per_event"] / auto["us_per_event"])]
+
+
+TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_pwm,
+              "scaling": _rows_scaling, "codegen": _rows_codegen,
+              "realtime": _rows_realtime, "multibody": _rows_multibody,
+              "estimation": _rows_estimation, "dimensions": _rows_dimensions,
+              "subsystems": _rows_subsystems, "events": _rows_events}
+
+
+def table(results: dict) -> list[dict]:
+    """One row per headline figure: Mechatron's value, its peer measured in the same run,
+    the ratio peer / Mechatron (above 1: Mechatron faster or smaller) and the goal."""
+    rows = []
+    for name, make in TABLE_ROWS.items():
+        r = results.get(name)
+        if r and "error" not in r:
+            rows.extend(dict(row, benchmark=name) for row in make(r))
+    return rows
+
+
+def _fmt(x) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, bool):
+        return "yes" if x else "NO"
+    if isinstance(x, float):
+        return f"{x:.3g}"
+    return str(x)
+
+
+def format_table(rows: list[dict]) -> str:
+    """The table as aligned text."""
+    head = ["figure", "unit", "mechatron", "peer", "peer value", "peer/mech", "goal", "met"]
+    body = [[r["figure"], r["unit"], _fmt(r["mechatron"]), r["peer"] or "-",
+             _fmt(r["peer_value"]), _fmt(r["ratio_peer_over_mechatron"]), r["goal"] or "-",
+             _fmt(r["goal_met"])] for r in rows]
+    widths = [max(len(str(line[k])) for line in [head, *body]) for k in range(len(head))]
+    lines = ["  ".join(str(c).ljust(w) for c, w in zip(line, widths)).rstrip()
+             for line in [head, *body]]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def _guarded(make, results: dict, what: str):
+    """``make(results)``; a key missing from a benchmark's output is reported, not fatal."""
+    try:
+        return make(results)
+    except Exception as exc:       # noqa: BLE001  (the other figures must still print)
+        log(f"{what} failed: {type(exc).__name__}: {exc}")
+        return {"error": f"{type(exc).__name__}: {exc}"}
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
@@ -130,15 +334,20 @@ def main(argv=None) -> int:
         except Exception as exc:   # one broken benchmark must not hide the others
             log(f"{name} failed: {type(exc).__name__}: {exc}")
             results[name] = {"error": f"{type(exc).__name__}: {exc}"}
+    rows = _guarded(table, results, "table")
     doc = {"environment": environment(), "quick": args.quick,
            "total_wall_s": time.perf_counter() - start,
-           "summary": _summary(results), "benchmarks": results}
+           "summary": _guarded(_summary, results, "summary"), "table": rows,
+           "benchmarks": results}
     text = dumps(doc)
     print(text)
+    if isinstance(rows, list):
+        print("\n" + format_table(rows), file=sys.stderr)
     if args.out:
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.out).write_text(text + "\n")
-    return 1 if any("error" in r for r in results.values()) else 0
+    broken = not isinstance(rows, list) or "error" in doc["summary"]
+    return 1 if broken or any("error" in r for r in results.values()) else 0
 
 
 if __name__ == "__main__":

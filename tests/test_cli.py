@@ -41,7 +41,7 @@ def test_models_json_lists_dc_motor(capsys):
     names = [m["name"] for m in data["models"]]
     assert "dc_motor" in names
     motor = data["models"][names.index("dc_motor")]
-    assert motor["variants"] == ["acausal", "ode", "blocks"]
+    assert motor["variants"] == ["acausal", "ode", "blocks", "inputs"]
     assert motor["description"]
 
 
@@ -72,7 +72,8 @@ def test_show_json(capsys):
                                        "source": "seed table 6-1, calculated"}
     assert data["outputs"]["w"] == {"unit": "rad/s",
                                     "paths": {"acausal": "inertia.w", "ode": "w",
-                                              "blocks": "speed.y"}}
+                                              "blocks": "speed.y",
+                                              "inputs": "inertia.w"}}
     assert data["experiment"]["t_stop"] == 0.5
     assert data["expected"]["w"] == pytest.approx(W_FINAL, rel=1e-12)
 
@@ -237,7 +238,7 @@ def test_compare_variants_agree(capsys, tmp_path):
 def test_compare_json(capsys):
     data = run_json(capsys, "compare", "dc_motor")
     assert data["reference"] == "acausal"
-    assert data["variants"] == ["acausal", "ode", "blocks"]
+    assert data["variants"] == ["acausal", "ode", "blocks", "inputs"]
     assert data["points"] == 1001
     for variant in ("ode", "blocks"):
         for label in ("w", "i"):

@@ -3,24 +3,38 @@ mechatronic systems.
 
 >>> import mechatron as mt
 >>> res = mt.simulate(mt.models.get("dc_motor").build(), 0.5)
+
+``import mechatron`` loads the modeling language only; the compiler, the solvers, the
+component library, the model database and the applications (codegen, estimation, realtime,
+report, viz) are imported on first use of their name (``mt.simulate``,
+``mt.library.electrical``, ``mt.models.get``, ...), and pint, SciPy, pandas and matplotlib
+when a function needs them.
 """
 
+from __future__ import annotations
+
+import importlib
 import logging as _logging
 
-# The library logs to the "mechatron" logger and never prints; an application chooses
-# what to show (the command line shows warnings, and more with -v).
-_logging.getLogger("mechatron").addHandler(_logging.NullHandler())
-
-from mechatron.compiler import CompiledModel, compile_model  # noqa: E402
+from mechatron import errors
 from mechatron.core import (Across, Component, Connector, Discrete, Domain, Input, Output,
                             Parameter, Start, System, Through, Variable, connect, der,
                             if_else, logic_and, logic_not, logic_or)
 from mechatron.core.events import (Clock, initial, pre, reinit, sample, steady_state,
                                    terminal, when)
-from mechatron.results import SimResult, SolverStats
-from mechatron.solvers import simulate
-from mechatron.analysis import OperatingPoint, linearize, trim
-from mechatron import errors, library, models  # noqa: E402  (public subpackages)
+
+# The library logs to the "mechatron" logger and never prints; an application chooses
+# what to show (the command line shows warnings, and more with -v).
+_logging.getLogger("mechatron").addHandler(_logging.NullHandler())
+
+TYPE_CHECKING = False       # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:
+    from mechatron import (analysis, cli, codegen, compiler, core, estimation, library,
+                           models, realtime, report, results, solvers, units, viz)
+    from mechatron.analysis import OperatingPoint, linearize, trim
+    from mechatron.compiler import CompiledModel, compile_model
+    from mechatron.results import SimResult, SolverStats
+    from mechatron.solvers import simulate
 
 __version__ = "0.1.0"
 
@@ -31,3 +45,33 @@ __all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable"
            "compile_model", "CompiledModel", "simulate", "SimResult", "SolverStats",
            "linearize", "trim", "OperatingPoint",
            "library", "models"]
+
+#: Public names imported on first access: name -> module that defines it.
+_LAZY_NAMES = {"compile_model": "mechatron.compiler",
+               "linearize": "mechatron.analysis",
+               "trim": "mechatron.analysis",
+               "OperatingPoint": "mechatron.analysis",
+               "CompiledModel": "mechatron.compiler",
+               "simulate": "mechatron.solvers",
+               "SimResult": "mechatron.results",
+               "SolverStats": "mechatron.results"}
+
+#: Subpackages reachable as attributes (``mt.library``, ``mt.codegen``) before an import.
+_SUBMODULES = frozenset({"analysis", "cli", "codegen", "compiler", "core", "estimation", "library",
+                         "models", "realtime", "report", "results", "solvers", "units",
+                         "viz"})
+
+
+def __getattr__(name: str):
+    if name in _LAZY_NAMES:
+        value = getattr(importlib.import_module(_LAZY_NAMES[name]), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f"{__name__}.{name}")
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value     # later accesses are plain attribute lookups
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY_NAMES) | _SUBMODULES)

@@ -4,6 +4,9 @@ Mechatron keeps runtime values as SI floats. Users may give a parameter as a num
 as SI), a string such as ``"340 uH"`` or ``"1500 rpm"``, or a pint quantity; the value is
 converted to the declared unit of the parameter, and a value of the wrong dimension is an
 error naming the parameter.
+
+pint and its registry are loaded on first use (``import mechatron`` does not pay for them):
+``ureg`` is a module attribute built by the first access.
 """
 
 from __future__ import annotations
@@ -12,20 +15,32 @@ import functools
 import numbers
 import re
 
-import pint
-
 from mechatron.errors import UnitError
+
+TYPE_CHECKING = False       # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:
+    import pint
 
 __all__ = ["ureg", "to_si", "to_base", "check_unit", "check_number_text", "dimensionality"]
 
-ureg = pint.UnitRegistry()
-ureg.define("@alias ohm = Ohm")  # the capitalised spelling engineers write
-_Q = ureg.Quantity
+
+@functools.lru_cache(maxsize=None)
+def _registry() -> pint.UnitRegistry:
+    import pint
+    registry = pint.UnitRegistry()
+    registry.define("@alias ohm = Ohm")  # the capitalised spelling engineers write
+    return registry
+
+
+def __getattr__(name: str):
+    if name == "ureg":
+        return _registry()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @functools.lru_cache(maxsize=None)
 def _unit(unit: str) -> pint.Unit:
-    return ureg.Unit(unit or "dimensionless")
+    return _registry().Unit(unit or "dimensionless")
 
 
 def check_unit(unit: str, where: str = "") -> str:
@@ -79,11 +94,12 @@ def to_si(value, unit: str, where: str) -> float:
     if isinstance(value, str):
         check_number_text(value, where)
         try:
-            value = _Q(value)
+            value = _registry().Quantity(value)
         except Exception:
             raise UnitError(f"{where}: cannot read {value!r} as a quantity. "
                             f"Write a number and a unit, e.g. '1.5 {unit or ''}'.".rstrip(),
                             path=where) from None
+    import pint
     if isinstance(value, pint.Quantity):
         target = _unit(unit)
         if value.dimensionality != target.dimensionality:
@@ -103,7 +119,7 @@ def to_base(text: str, where: str) -> float:
     Raises :class:`UnitError` for a comma in a number or text pint cannot read."""
     check_number_text(text, where)
     try:
-        return float(_Q(text).to_base_units().magnitude)
+        return float(_registry().Quantity(text).to_base_units().magnitude)
     except Exception:
         raise UnitError(f"{where}: cannot read {text!r} as a quantity; write a number and "
                         "a unit, e.g. '340 uH'.", path=where) from None

@@ -161,14 +161,43 @@ def _mark_parameters_used(code: str) -> str:
     return "\n".join(out) + "\n"
 
 
+_READ = re.compile(r"\barg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0")
+_WRITE = re.compile(r"\bif \(res\[(\d+)\]!=0\) (res\[\1\]\[\d+\]=)")
+
+
+def _drop_null_checks(code: str) -> str:
+    """Remove CasADi's test of every argument and result pointer before each scalar
+    read (``arg[i]? arg[i][k] : 0``) and write (``if (res[i]!=0) res[i][k]=``).
+
+    Mechatron's callers (``NAME.c``, the FMU wrappers) pass every argument and result
+    of the step, output and derivative functions, so the tests only cost a branch per
+    scalar in the real-time step. The arithmetic is untouched."""
+    return _WRITE.sub(r"\2", _READ.sub(r"\2", code))
+
+
 def casadi_source(prep: Prepared) -> str:
-    """The C source of the step and output functions, as CasADi emits it."""
+    """The C source of the step, output and derivative functions, as CasADi emits it
+    without its null-pointer tests (every argument and result must be given)."""
     gen = ca.CodeGenerator(f"{prep.name}_casadi.c",
                            {"casadi_real": "double", "casadi_int": "int",
                             "prefix": f"{prep.name}_casadi_", "with_header": False})
     for f in prep.functions:
         gen.add(f)
-    return _mark_parameters_used(gen.dump())
+    return _mark_parameters_used(_drop_null_checks(gen.dump()))
+
+
+def reads_state_before_writing(step: ca.Function) -> bool:
+    """Whether the SX ``step`` reads every entry of its input 0 (the state) before it
+    writes any entry of its output 0 (the next state): then the generated step can
+    update the state in place, without a scratch copy."""
+    last_read, first_write = -1, step.n_instructions()
+    for k in range(step.n_instructions()):
+        op = step.instruction_id(k)
+        if op == ca.OP_INPUT and step.instruction_input(k)[0] == 0:
+            last_read = k
+        elif op == ca.OP_OUTPUT and step.instruction_output(k)[0] == 0:
+            first_write = min(first_write, k)
+    return last_read < first_write
 
 
 def count_operations(f: ca.Function) -> int:
@@ -210,6 +239,7 @@ def template_values(prep: Prepared) -> dict:
         ydecl.append(render("c/output_getter.h.in", **v).rstrip())
         ydef.append(render("c/output_getter.c.in", **v).rstrip())
     bounds = [_parameter_bounds(cm, i) for i in range(npar)]
+    in_place = reads_state_before_writing(step)
     inputs = []
     for k, ident in enumerate(unique_identifiers(n.upper() for n in cm.input_names)):
         doc = f": {cm.input_docs[k]}" if cm.input_docs[k] else ""
@@ -233,7 +263,10 @@ def template_values(prep: Prepared) -> dict:
         parameter_declarations="\n".join(pdecl), parameter_definitions="\n".join(pdef),
         output_declarations="\n".join(ydecl), output_definitions="\n".join(ydef),
         csv_header=c_string(_header_line(cm.names)),
-        ninputs=len(cm.input_names), input_defines="".join(i + "\n" for i in inputs))
+        ninputs=len(cm.input_names), input_defines="".join(i + "\n" for i in inputs),
+        step_x_out="m->x" if in_place else "m->x_next",
+        step_copy=("/* the step reads the whole state before writing it: updated in place */"
+                   if in_place else "memcpy(m->x, m->x_next, sizeof m->x);"))
 
 
 def generate_c(model, out_dir, *, solver: str = "rk4", dt: float, iterations: int = 3,

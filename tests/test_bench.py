@@ -1,0 +1,117 @@
+"""The benchmarks run and their summary and table code reads what they produce (issue 17,
+part 7): every ``bench/*.py`` imports, every benchmark of ``run_all`` runs at its tiny size
+(seconds, not minutes: the figures mean nothing, the keys do), and ``run_all``'s summary
+and table are built from those outputs, so a key renamed in a benchmark fails here rather
+than at the end of a long benchmark run. Speed itself is never asserted."""
+
+import importlib
+import inspect
+import json
+import math
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parents[1] / "bench"
+
+
+@pytest.fixture(scope="module")
+def run_all():
+    sys.path.insert(0, str(BENCH))
+    try:
+        yield importlib.import_module("run_all")
+    finally:
+        sys.path.remove(str(BENCH))
+
+
+@pytest.fixture(scope="module")
+def tiny_results(run_all):
+    results, seconds = {}, {}
+    for name, run in run_all.BENCHMARKS.items():
+        if name in ("codegen", "realtime") and shutil.which("cc") is None:
+            continue
+        start = time.perf_counter()
+        results[name] = run(quick=True, tiny=True)
+        seconds[name] = time.perf_counter() - start
+    return results, seconds
+
+
+def test_every_bench_script_imports_and_is_in_run_all(run_all):
+    scripts = sorted(p.stem for p in BENCH.glob("*.py"))
+    for name in scripts:
+        importlib.import_module(name)
+    benchmarks = {f"bench_{name}" for name in run_all.BENCHMARKS}
+    assert benchmarks == {s for s in scripts if s.startswith("bench_")}
+    for name, run in run_all.BENCHMARKS.items():
+        assert "tiny" in inspect.signature(run).parameters, name
+        assert name in run_all.TABLE_ROWS, name
+
+
+def test_summary_and_table_read_every_benchmark(run_all, tiny_results):
+    results, _ = tiny_results
+    for name, out in results.items():
+        assert "error" not in out, (name, out.get("error"))
+    summary = run_all._summary(results)         # raises KeyError on a renamed key
+    assert {"dc_motor", "pwm", "rc_ladder", "codegen"} <= set(summary)
+    rows = run_all.table(results)
+    assert {r["benchmark"] for r in rows} == set(results) - (
+        {"realtime"} if "skipped" in results.get("realtime", {}) else set())
+    for row in rows:
+        assert isinstance(row["figure"], str) and row["figure"]
+        value = row["mechatron"]
+        assert isinstance(value, (int, float)) and math.isfinite(value), row
+        if row["peer"] is not None:
+            ratio = row["ratio_peer_over_mechatron"]
+            assert ratio is None or (math.isfinite(ratio) and ratio > 0), row
+        if row["goal"] is not None and row["goal_met"] is not None:
+            assert isinstance(row["goal_met"], bool), row
+    text = run_all.format_table(rows)
+    assert len(text.splitlines()) == len(rows) + 2
+    json.loads(run_all.dumps({"table": rows, "summary": summary}))
+
+
+def test_a_missing_key_is_reported_not_fatal(run_all, tiny_results):
+    results, _ = tiny_results
+    broken = dict(results, pwm={k: v for k, v in results["pwm"].items()
+                                if k != "us_per_event_growth_auto"})
+    out = run_all._guarded(run_all.table, broken, "table")
+    assert out == {"error": "KeyError: 'us_per_event_growth_auto'"}
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+def test_hand_written_c_peer_is_the_dc_motor_rk4_step(tmp_path):
+    """The peer of the generated C computes the same thing: its states after 2000 steps
+    agree with an RK4 written here in NumPy, and with the desktop fixed-step run, to
+    rounding."""
+    import subprocess
+
+    import mechatron as mt
+    from mechatron.codegen.c.build import C_FLAGS
+
+    exe = tmp_path / "hand"
+    subprocess.run(["cc", *C_FLAGS.split(), "-o", str(exe), str(BENCH / "c" / "dc_motor_rk4.c"),
+                    "-lm"], check=True, capture_output=True)
+    cm = mt.compile_model(mt.models.get("dc_motor").build())
+    V, R, L, k, J, D = (float(v) for v in cm.p0)
+    out = subprocess.run([str(exe), *map(repr, (V, R, L, k, J, D)), "2000"], check=True,
+                         capture_output=True, text=True).stdout
+    x_c = np.array(json.loads(out)["x"])
+
+    def f(x):
+        return np.array([(V - R * x[0] - k * x[1]) / L, (k * x[0] - D * x[1]) / J])
+
+    h, x = 1e-4, np.zeros(2)
+    for _ in range(2000):
+        k1 = f(x)
+        k2 = f(x + h / 2 * k1)
+        k3 = f(x + h / 2 * k2)
+        k4 = f(x + h * k3)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    np.testing.assert_allclose(x_c, x, rtol=1e-12)
+    desk = mt.simulate(cm, 0.2, solver="rk4", dt=h)
+    np.testing.assert_allclose(x_c, [desk.final("inductor.i"), desk.final("inertia.w")],
+                               rtol=1e-12)

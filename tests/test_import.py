@@ -1,0 +1,64 @@
+"""``import mechatron`` loads the modeling language only (issue 17, part 5): the heavy
+dependencies and the applications are imported when first used, and every public name
+still resolves. The timing itself is in ``bench/bench_import.py``."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+HEAVY = ["matplotlib", "pandas", "pyarrow", "scipy", "pint",
+         "mechatron.compiler", "mechatron.solvers", "mechatron.library.electrical",
+         "mechatron.models.dc_motor", "mechatron.codegen", "mechatron.estimation",
+         "mechatron.realtime", "mechatron.report", "mechatron.viz"]
+
+
+def _run(code: str) -> dict:
+    env = dict(os.environ, PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_import_mechatron_does_not_load_heavy_modules():
+    loaded = _run("import json, sys, mechatron\n"
+                  f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))")
+    assert loaded == []
+
+
+def test_public_names_resolve_on_first_use():
+    code = """
+import json, sys
+import mechatron as mt
+from mechatron import compile_model, simulate, library, models
+out = {
+    "resistor": mt.library.electrical.Resistor.__name__,
+    "inertia": mt.library.rotational.Inertia.__name__,
+    "entry": mt.models.get("dc_motor").name,
+    "listed": "dc_motor_speed_pi" in [e.name for e in mt.models.list()],
+    "simulate": mt.simulate is simulate and simulate.__module__,
+    "compiled": mt.CompiledModel.__name__,
+    "compile": compile_model is mt.compile_model,
+    "submodules": [type(getattr(mt, n)).__name__ for n in ("codegen", "units", "results")],
+    "all": sorted(n for n in mt.__all__ if not hasattr(mt, n)),
+    "dir": {"simulate", "library", "compile_model"} <= set(dir(mt)),
+    "lib_dir": {"electrical", "multibody"} <= set(dir(mt.library)),
+}
+print(json.dumps(out))
+"""
+    out = _run(code)
+    assert out == {"resistor": "Resistor", "inertia": "Inertia", "entry": "dc_motor",
+                   "listed": True, "simulate": "mechatron.solvers.simulate",
+                   "compiled": "CompiledModel", "compile": True,
+                   "submodules": ["module", "module", "module"], "all": [],
+                   "dir": True, "lib_dir": True}
+
+
+def test_unknown_attribute_is_an_attribute_error():
+    out = _run("import json, mechatron as mt\n"
+               "try:\n    mt.no_such_name\nexcept AttributeError as e:\n"
+               "    print(json.dumps(str(e)))")
+    assert "no_such_name" in out
