@@ -12,6 +12,7 @@ import numpy as np
 from mechatron.core import Component, Output, Parameter
 from mechatron.errors import DataError
 from mechatron.library.blocks.interfaces import piecewise_linear
+from mechatron.library.blocks.waveforms import ramp_slope
 
 __all__ = ["Constant", "Step", "Ramp", "Sine", "Pulse", "Chirp", "FromData"]
 
@@ -40,17 +41,24 @@ class Step(Component):
 
 
 class Ramp(Component):
-    """Ramp: ``y = initial + slope*(t - start)`` from ``start`` on, ``initial`` before."""
+    """Ramp: ``y = initial + slope*(t - start)`` from ``start`` on, ``initial`` before,
+    held at ``initial + slope*duration`` from ``start + duration`` on.
+
+    The default ``duration = inf`` never stops rising. Start and end of the rise are
+    events (MSL's ``Ramp`` takes a ``height`` instead of a slope:
+    ``slope = height/duration``).
+    """
 
     y = Output("1", doc="Output")
     slope = Parameter("1/s", default=1.0, doc="Slope")
     start = Parameter("s", default=0.0, doc="Start time")
     initial = Parameter("1", default=0.0, doc="Initial value")
+    duration = Parameter("s", default=float("inf"), min=0,
+                         doc="Duration of the rise (inf: it never stops)")
 
     def equations(self):
-        t = self.time
-        return [self.y == self.initial + ca.if_else(self.start <= t,
-                                                    self.slope * (t - self.start), 0)]
+        return [self.y == self.initial + ramp_slope(self.time, self.slope, self.duration,
+                                                    self.start)]
 
 
 class Sine(Component):

@@ -23,7 +23,12 @@ from mechatron.library.electrical.sources import (ACCurrentSource, ACVoltageSour
                                                   CurrentControlledCurrentSource,
                                                   CurrentControlledVoltageSource,
                                                   DCCurrentSource, DCVoltageSource,
-                                                  ElectricalReference, PWMVoltageSource,
+                                                  ElectricalReference, ExpSineCurrent,
+                                                  ExpSineVoltage, PulseCurrent, PulseVoltage,
+                                                  PWMVoltageSource, RampCurrent, RampVoltage,
+                                                  StepCurrent, StepVoltage, TableCurrent,
+                                                  TableVoltage, TrapezoidCurrent,
+                                                  TrapezoidVoltage,
                                                   VoltageControlledCurrentSource,
                                                   VoltageControlledVoltageSource)
 
@@ -37,4 +42,8 @@ __all__ = ["Pin", "OnePort", "TwoPort", "Resistor", "Inductor", "Capacitor", "Di
            "ACVoltageSource", "ACCurrentSource", "ControlledCurrentSource",
            "PWMVoltageSource", "ControlledPWMVoltageSource",
            "VoltageControlledVoltageSource", "VoltageControlledCurrentSource",
-           "CurrentControlledVoltageSource", "CurrentControlledCurrentSource"]
+           "CurrentControlledVoltageSource", "CurrentControlledCurrentSource",
+           # issue 18
+           "StepVoltage", "RampVoltage", "PulseVoltage", "TrapezoidVoltage", "ExpSineVoltage",
+           "TableVoltage", "StepCurrent", "RampCurrent", "PulseCurrent", "TrapezoidCurrent",
+           "ExpSineCurrent", "TableCurrent"]
