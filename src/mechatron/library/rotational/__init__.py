@@ -16,6 +16,7 @@ from mechatron.library.rotational.components import (AngularVelocitySensor, Idea
                                                       RotationalDamper, RotationalFriction,
                                                       RotationalReference, RotationalSpring)
 from mechatron.library.rotational.compliant import ElastoBacklash, SpringDamper
+from mechatron.library.rotational.encoders import HallSensor, IncrementalEncoder
 from mechatron.library.rotational.gears import IdealPlanetary, LossyGear, SimpleGear
 from mechatron.library.rotational.interfaces import Flange, TwoFlange
 from mechatron.library.rotational.nonlinear import (FanLoad, FrictionClutch,
@@ -31,4 +32,5 @@ __all__ = ["Flange", "TwoFlange", "Inertia", "RotationalSpring", "RotationalDamp
            "LossyGear", "SimpleGear", "IdealAngularVelocitySource", "IdealAngleSource",
            "ConstantTorque", "TorqueSensor", "AngleSensor", "PowerSensor",
            # issue 18
-           "SpringDamper", "ElastoBacklash", "IdealPlanetary"]
+           "SpringDamper", "ElastoBacklash", "IdealPlanetary", "IncrementalEncoder",
+           "HallSensor"]
