@@ -50,3 +50,9 @@ def test_ptp_profile(q0, q1, vmax, amax, t0):
     assert res["p.moving"][ok].tolist() == ((t >= t0) & (t < t0 + T))[ok].tolist()
     i_end = np.searchsorted(t, t0 + T)
     assert res["p.q"][i_end + 1] == q1 and res["p.qd"][i_end + 1] == 0.0
+
+
+def test_ptp_without_a_distance_stays_put():
+    res = run(q_begin=1.5, q_end=1.5, start_time=0.5)
+    assert np.all(res["p.q"] == 1.5)
+    assert np.all(res["p.qd"] == 0.0) and np.all(res["p.qdd"] == 0.0)

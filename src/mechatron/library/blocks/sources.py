@@ -195,9 +195,11 @@ class KinematicPTP(Component):
     def equations(self):
         delta = self.q_end - self.q_begin
         dist = ca.fabs(delta)
-        v = ca.fmin(self.qd_max, ca.sqrt(dist * self.qdd_max))
+        # (the floors keep sqrt and the divisions finite, with finite derivatives, when
+        # q_end == q_begin: then a == 0 and q stays at q_begin)
+        v = ca.fmin(self.qd_max, ca.sqrt(ca.fmax(dist * self.qdd_max, 1e-300)))
         t_a = v / self.qdd_max
-        t_v = dist / ca.fmax(v, 1e-300) - t_a
+        t_v = ca.fmax(dist / v - t_a, 0)
         t_end = 2 * t_a + t_v
         a = self.qdd_max * delta / ca.fmax(dist, 1e-300)  # its sign, no event
         u = self.time - self.start_time
