@@ -136,8 +136,9 @@ def test_table_voltage_interpolates_holds_and_jumps():
     # breakpoints: 0.005 (the rise starts), 0.015 (held), 0.025 (jump, then a rise),
     # 0.04 (the last value held)
     assert res.stats.events["src"] == 4
-    wave = lambda tt: 0.25 + np.interp(tt - 0.005, [0, 0.01, 0.02, 0.02 + 1e-15, 0.035],  # noqa: E731
-                                      [1, 3, 3, -1, 0.5])
+    def wave(tt):
+        return 0.25 + np.interp(tt - 0.005, [0, 0.01, 0.02, 0.02 + 1e-15, 0.035],
+                                [1, 3, 3, -1, 0.5])
     ref = scipy_rc(wave, res.t, [0.005, 0.015, 0.025, 0.04])
     np.testing.assert_allclose(res["c.v"], ref, atol=2e-7)
 

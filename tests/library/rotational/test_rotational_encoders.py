@@ -3,7 +3,6 @@ quantized angle and speed at each read-out against floor(phi cpr / 2 pi) compute
 the Hall sensors' six states per electrical revolution and their edges."""
 
 import numpy as np
-import pytest
 
 import mechatron as mt
 from mechatron.library import rotational as rot

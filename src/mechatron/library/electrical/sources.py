@@ -279,9 +279,9 @@ class RampVoltage(_TimedVoltage):
 
     Equations::
 
-        v == offset                                           t <  start_time
-        v == offset + V (t - start_time) / duration           start_time <= t < start_time + duration
-        v == offset + V                                       t >= start_time + duration
+        v == offset                             t <  t0        (t0 = start_time)
+        v == offset + V (t - t0) / duration     t0 <= t < t0 + duration
+        v == offset + V                         t >= t0 + duration
 
     Both kinks are events. ``duration`` must be > 0.
     """
@@ -299,9 +299,9 @@ class RampCurrent(_TimedCurrent):
 
     Equations::
 
-        i == offset                                           t <  start_time
-        i == offset + I (t - start_time) / duration           start_time <= t < start_time + duration
-        i == offset + I                                       t >= start_time + duration
+        i == offset                             t <  t0        (t0 = start_time)
+        i == offset + I (t - t0) / duration     t0 <= t < t0 + duration
+        i == offset + I                         t >= t0 + duration
     """
 
     I = Parameter("A", default=1.0, doc="Height of the ramp")  # noqa: E741
