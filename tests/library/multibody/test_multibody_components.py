@@ -11,6 +11,7 @@ from mechatron.library import blocks
 from mechatron.library import multibody as mb
 from mechatron.library import rotational as rot
 from mechatron.library.multibody import mechanisms as mech
+from mechatron.library.multibody.parts import G_STANDARD   # the bodies' default g
 
 TIGHT = dict(rtol=1e-12, atol=1e-12)
 
@@ -27,12 +28,12 @@ def test_incline_prismatic_matches_the_1d_translational_model():
     np.testing.assert_allclose(r3["mass.frame.x"], s * math.cos(ang), atol=1e-12)
     np.testing.assert_allclose(r3["mass.frame.y"], s * math.sin(ang), atol=1e-12)
     normal = -r3["mass.frame.fx"] * -math.sin(ang) - r3["mass.frame.fy"] * math.cos(ang)
-    np.testing.assert_allclose(-normal, 2.0 * 9.81 * math.cos(ang), rtol=1e-9)
+    np.testing.assert_allclose(-normal, 2.0 * G_STANDARD * math.cos(ang), rtol=1e-9)
 
 
 def test_incline_settles_at_the_static_deflection():
     res = mt.simulate(mech.incline(d=20.0), 20.0, **TIGHT)
-    assert res.final("joint.s") == pytest.approx(-2.0 * 9.81 * math.sin(math.radians(60))
+    assert res.final("joint.s") == pytest.approx(-2.0 * G_STANDARD * math.sin(math.radians(60))
                                                  / 50.0, abs=1e-9)
 
 
@@ -160,7 +161,7 @@ def test_free_prismatic_lets_a_mass_slide_down_a_frictionless_incline():
     s.connect(slope.frame_b, joint.frame_a)
     s.connect(joint.frame_b, mass.frame)
     res = mt.simulate(s, 1.0, **TIGHT)
-    np.testing.assert_allclose(res["joint.s"], -9.81 * math.sin(ang) * res.t ** 2 / 2,
+    np.testing.assert_allclose(res["joint.s"], -G_STANDARD * math.sin(ang) * res.t ** 2 / 2,
                                atol=1e-10)
 
 
@@ -178,3 +179,23 @@ def test_kinetic_mechanism_gains_the_work_of_its_motor():
 def test_bad_state_select_value_is_rejected():
     with pytest.raises(ValueError, match="state_select"):
         mt.Variable("m", state_select="always!")
+
+
+def test_default_gravity_is_standard_gravity():
+    """A free body falls at 9.80665 m/s^2 (MSL's and Simscape Multibody's default); the
+    database models that follow the thesis keep its 9.81."""
+    s = mt.System("fall")
+    body = s.add("body", mb.Body(m=1.0, J=0.1))
+    zero = s.add("zero", blocks.Constant(value=0.0))
+    force = s.add("force", mb.WorldForce())          # no force: a free fall
+    s.connect(zero.y, force.fx_in, force.fy_in)
+    s.connect(body.frame_a, force.frame)
+    t = np.linspace(0, 1, 11)
+    res = mt.simulate(s, 1.0, t_out=t, **TIGHT)
+    np.testing.assert_allclose(res["body.y"], -9.80665 * t ** 2 / 2, atol=1e-12)
+    assert mb.PointMass._declarations["g"].default == 9.80665
+    for name in ("double_pendulum", "kinetic_mechanism"):
+        entry = mt.models.get(name)
+        cm = mt.compile_model(entry.build("multibody"))
+        gs = {k: float(v) for k, v in zip(cm.param_names, cm.p0) if k.endswith(".g")}
+        assert gs and all(v == 9.81 for v in gs.values()), (name, gs)

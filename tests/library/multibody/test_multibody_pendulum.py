@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 import mechatron as mt
 from mechatron.library import multibody as mb
 from mechatron.library.multibody import mechanisms as mech
+from mechatron.library.multibody.parts import G_STANDARD   # the bodies' default g
 from mechatron.library.multibody.reference import (double_pendulum_energy,
                                                    double_pendulum_rhs)
 
@@ -68,7 +69,7 @@ def test_compound_pendulum_small_oscillation_period():
     body = s.add("body", mb.Body(m=m_, J=j_, rcm_y=-l_))
     s.connect(w.frame, joint.frame_a)
     s.connect(joint.frame_b, body.frame_a)
-    omega = math.sqrt(m_ * 9.81 * l_ / (j_ + m_ * l_ ** 2))
+    omega = math.sqrt(m_ * G_STANDARD * l_ / (j_ + m_ * l_ ** 2))
     t = np.linspace(0.0, 3.0, 3001)
     res = mt.simulate(s, 3.0, t_out=t, rtol=1e-11, atol=1e-13)
     # the small-angle solution q0 cos(omega t); the nonlinearity is O(q0^3)
@@ -97,7 +98,7 @@ def test_rod_tension_from_the_force_sensor_is_m_g_cos_plus_m_l_w2():
     s.connect(fs.frame_b, mass.frame, pos.frame, vel.frame, acc.frame)
     res = mt.simulate(s, 2.0, rtol=1e-11, atol=1e-12)
     a, wq = res["joint.q"], res["joint.w"]
-    tension = m_ * 9.81 * np.cos(a) + m_ * l_ * wq ** 2
+    tension = m_ * G_STANDARD * np.cos(a) + m_ * l_ * wq ** 2
     # unit vector from the mass to the pivot: (-sin a, cos a)
     along = res["fs.fx"] * -np.sin(a) + res["fs.fy"] * np.cos(a)
     np.testing.assert_allclose(along, tension, atol=1e-8)
@@ -107,7 +108,7 @@ def test_rod_tension_from_the_force_sensor_is_m_g_cos_plus_m_l_w2():
     np.testing.assert_allclose(res["pos.y"], -l_ * np.cos(a), atol=1e-10)
     np.testing.assert_allclose(res["vel.vx"], l_ * np.cos(a) * wq, atol=1e-9)
     # tangential + centripetal acceleration, with a'' = -g/l sin a
-    alpha = -9.81 / l_ * np.sin(a)
+    alpha = -G_STANDARD / l_ * np.sin(a)
     ax = l_ * (np.cos(a) * alpha - np.sin(a) * wq ** 2)
     ay = l_ * (np.sin(a) * alpha + np.cos(a) * wq ** 2)
     np.testing.assert_allclose(res["acc.ax"], ax, atol=1e-8)

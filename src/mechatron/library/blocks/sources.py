@@ -12,8 +12,9 @@ import numpy as np
 from mechatron.core import Component, Output, Parameter
 from mechatron.errors import DataError
 from mechatron.library.blocks.interfaces import piecewise_linear
+from mechatron.library.blocks.waveforms import ramp_slope
 
-__all__ = ["Constant", "Step", "Ramp", "Sine", "Pulse", "Chirp", "FromData"]
+__all__ = ["Constant", "Step", "Ramp", "Sine", "Pulse", "Chirp", "FromData", "KinematicPTP"]
 
 
 class Constant(Component):
@@ -40,17 +41,24 @@ class Step(Component):
 
 
 class Ramp(Component):
-    """Ramp: ``y = initial + slope*(t - start)`` from ``start`` on, ``initial`` before."""
+    """Ramp: ``y = initial + slope*(t - start)`` from ``start`` on, ``initial`` before,
+    held at ``initial + slope*duration`` from ``start + duration`` on.
+
+    The default ``duration = inf`` never stops rising. Start and end of the rise are
+    events (MSL's ``Ramp`` takes a ``height`` instead of a slope:
+    ``slope = height/duration``).
+    """
 
     y = Output("1", doc="Output")
     slope = Parameter("1/s", default=1.0, doc="Slope")
     start = Parameter("s", default=0.0, doc="Start time")
     initial = Parameter("1", default=0.0, doc="Initial value")
+    duration = Parameter("s", default=float("inf"), min=0,
+                         doc="Duration of the rise (inf: it never stops)")
 
     def equations(self):
-        t = self.time
-        return [self.y == self.initial + ca.if_else(self.start <= t,
-                                                    self.slope * (t - self.start), 0)]
+        return [self.y == self.initial + ramp_slope(self.time, self.slope, self.duration,
+                                                    self.start)]
 
 
 class Sine(Component):
@@ -152,3 +160,64 @@ class FromData(Component):
     def equations(self):
         t, v = self._table
         return [self.y == piecewise_linear(self.time, t, v)]
+
+
+class KinematicPTP(Component):
+    """Point-to-point motion with limited speed and acceleration (MSL's
+    ``KinematicPTP2``): from ``q_begin`` at ``start_time`` to ``q_end``, accelerating at
+    ``qdd_max``, cruising at ``qd_max`` (if the distance allows it), decelerating at
+    ``qdd_max``.
+
+    With ``D = |q_end - q_begin|``, the peak speed ``v = min(qd_max, sqrt(D qdd_max))``
+    (a triangle when ``D < qd_max^2 / qdd_max``), ``T_a = v / qdd_max``,
+    ``T_v = D / v - T_a``, ``u = t - start_time``, ``T = 2 T_a + T_v`` and
+    ``a = qdd_max sign(q_end - q_begin)``::
+
+        qdd == a,  qd == a u,            q == q_begin + a u^2 / 2          0 <= u < T_a
+        qdd == 0,  qd == a T_a,          q == q_begin + a T_a (u - T_a/2)  T_a <= u < T_a + T_v
+        qdd == -a, qd == a (T - u),      q == q_end - a (T - u)^2 / 2      T_a + T_v <= u < T
+        qdd == 0,  qd == 0,              q == q_end                        u >= T
+
+    and ``q == q_begin`` before ``start_time``. Each phase change is an event; ``moving``
+    is 1 during the motion. ``qd`` is continuous, ``q`` continuously differentiable.
+    """
+
+    q = Output("1", doc="Position reference")
+    qd = Output("1", doc="Speed reference, dq/dt")
+    qdd = Output("1", doc="Acceleration reference, d(qd)/dt")
+    moving = Output("1", doc="1 during the motion, else 0")
+    q_begin = Parameter("1", default=0.0, doc="Start position")
+    q_end = Parameter("1", default=1.0, doc="End position")
+    qd_max = Parameter("1/s", default=1.0, min=0, doc="Maximum speed (> 0)")
+    qdd_max = Parameter("1/s^2", default=1.0, min=0, doc="Maximum acceleration (> 0)")
+    start_time = Parameter("s", default=0.0, doc="Start of the motion")
+
+    def equations(self):
+        delta = self.q_end - self.q_begin
+        dist = ca.fabs(delta)
+        # (the floors keep sqrt and the divisions finite, with finite derivatives, when
+        # q_end == q_begin: then a == 0 and q stays at q_begin)
+        v = ca.fmin(self.qd_max, ca.sqrt(ca.fmax(dist * self.qdd_max, 1e-300)))
+        t_a = v / self.qdd_max
+        t_v = ca.fmax(dist / v - t_a, 0)
+        t_end = 2 * t_a + t_v
+        a = self.qdd_max * delta / ca.fmax(dist, 1e-300)  # its sign, no event
+        u = self.time - self.start_time
+        t0 = self.start_time
+        accel = t0 <= self.time
+        cruise = t0 + t_a <= self.time
+        decel = t0 + t_a + t_v <= self.time
+        done = t0 + t_end <= self.time
+        r = t_end - u
+        q = ca.if_else(done, self.q_end,
+                       ca.if_else(decel, self.q_end - a * r ** 2 / 2,
+                                  ca.if_else(cruise, self.q_begin + a * t_a * (u - t_a / 2),
+                                             ca.if_else(accel, self.q_begin + a * u ** 2 / 2,
+                                                        self.q_begin))))
+        qd = ca.if_else(done, 0, ca.if_else(decel, a * r,
+                                            ca.if_else(cruise, a * t_a,
+                                                       ca.if_else(accel, a * u, 0))))
+        qdd = ca.if_else(done, 0, ca.if_else(decel, -a, ca.if_else(cruise, 0,
+                                                                  ca.if_else(accel, a, 0))))
+        return [self.q == q, self.qd == qd, self.qdd == qdd,
+                self.moving == ca.if_else(ca.logic_and(accel, ca.logic_not(done)), 1, 0)]

@@ -14,7 +14,11 @@ from mechatron.library.electrical.interfaces import OnePort, Pin, TwoPort
 from mechatron.library.electrical.passive import (Capacitor, Diode, HeatingResistor, Inductor,
                                                   MutualInductor, Potentiometer, Resistor,
                                                   VariableResistor)
-from mechatron.library.electrical.semiconductors import NMOSFET, PMOSFET, ExponentialDiode
+from mechatron.library.electrical.battery import Battery
+from mechatron.library.electrical.converters import HalfBridge, HBridge, ThreePhaseBridge
+from mechatron.library.electrical.semiconductors import (NMOSFET, NPN, PMOSFET, PNP,
+                                                         ExponentialDiode, Thyristor,
+                                                         ZenerDiode)
 from mechatron.library.electrical.sensors import CurrentSensor, PowerSensor, VoltageSensor
 from mechatron.library.electrical.sources import (ACCurrentSource, ACVoltageSource,
                                                   ControlledCurrentSource,
@@ -23,9 +27,15 @@ from mechatron.library.electrical.sources import (ACCurrentSource, ACVoltageSour
                                                   CurrentControlledCurrentSource,
                                                   CurrentControlledVoltageSource,
                                                   DCCurrentSource, DCVoltageSource,
-                                                  ElectricalReference, PWMVoltageSource,
+                                                  ElectricalReference, ExpSineCurrent,
+                                                  ExpSineVoltage, PulseCurrent, PulseVoltage,
+                                                  PWMVoltageSource, RampCurrent, RampVoltage,
+                                                  StepCurrent, StepVoltage, TableCurrent,
+                                                  TableVoltage, TrapezoidCurrent,
+                                                  TrapezoidVoltage,
                                                   VoltageControlledCurrentSource,
                                                   VoltageControlledVoltageSource)
+from mechatron.library.rotational.encoders import HallSensor, IncrementalEncoder
 
 __all__ = ["Pin", "OnePort", "TwoPort", "Resistor", "Inductor", "Capacitor", "Diode",
            "DCVoltageSource", "ControlledVoltageSource", "DCCurrentSource",
@@ -37,4 +47,11 @@ __all__ = ["Pin", "OnePort", "TwoPort", "Resistor", "Inductor", "Capacitor", "Di
            "ACVoltageSource", "ACCurrentSource", "ControlledCurrentSource",
            "PWMVoltageSource", "ControlledPWMVoltageSource",
            "VoltageControlledVoltageSource", "VoltageControlledCurrentSource",
-           "CurrentControlledVoltageSource", "CurrentControlledCurrentSource"]
+           "CurrentControlledVoltageSource", "CurrentControlledCurrentSource",
+           # issue 18
+           "StepVoltage", "RampVoltage", "PulseVoltage", "TrapezoidVoltage", "ExpSineVoltage",
+           "TableVoltage", "StepCurrent", "RampCurrent", "PulseCurrent", "TrapezoidCurrent",
+           "ExpSineCurrent", "TableCurrent", "ZenerDiode", "Thyristor", "NPN", "PNP",
+           "HalfBridge", "HBridge", "ThreePhaseBridge", "Battery",
+           # drive sensors (defined in mechatron.library.rotational.encoders)
+           "IncrementalEncoder", "HallSensor"]

@@ -1,7 +1,8 @@
 """Fixed frames, bodies and rigid connections of the planar multibody domain.
 
-Gravity: every body carries its own gravitational acceleration ``g`` (default
-9.81 m/s^2), acting along the world's -y axis. There is no global "world" object reaching
+Gravity: every body carries its own gravitational acceleration ``g`` (default: standard
+gravity 9.80665 m/s^2, as MSL's and Simscape Multibody's world), acting along the world's
+-y axis. There is no global "world" object reaching
 into the bodies (the language has no inner/outer); change ``g`` per body, or with
 ``params={"body.g": ...}`` at simulation time.
 """
@@ -14,7 +15,9 @@ from mechatron.library.multibody.interfaces import Frame, TwoFrame
 __all__ = ["World", "Fixed", "Body", "PointMass", "RigidTransform", "Rod", "Weld",
            "rotate", "G_STANDARD"]
 
-G_STANDARD = 9.81   # m/s^2, the default of every body's g (the seed's value)
+#: Standard gravity in m/s^2 (CGPM 1901, exact), the default of every body's ``g``; the
+#: database models that follow the thesis set its 9.81 explicitly.
+G_STANDARD = 9.80665
 
 
 def rotate(phi, rx, ry):
@@ -50,7 +53,7 @@ class World(Component, reference=True):
 
     Equations: ``frame.x = 0``, ``frame.y = 0``, ``frame.phi = 0``. Every mechanism needs
     one (or a :class:`Fixed`) frame as its ground. Gravity is applied by the bodies
-    themselves (each has ``g``, default 9.81 m/s^2, along the world's -y axis).
+    themselves (each has ``g``, default 9.80665 m/s^2, along the world's -y axis).
     """
 
     frame = Frame(doc="The world frame")

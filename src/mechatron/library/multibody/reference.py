@@ -17,11 +17,15 @@ import math
 
 import numpy as np
 
+#: Standard gravity (m/s^2), the bodies' default ``g``; written here again, not imported,
+#: so that the references share nothing with the components.
+G = 9.80665
+
 __all__ = ["double_pendulum_rhs", "double_pendulum_energy", "four_bar_rhs",
            "FourBarGeometry"]
 
 
-def double_pendulum_rhs(t, s, m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81):
+def double_pendulum_rhs(t, s, m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=G):
     """``d/dt (a1, a2, w1, w2)`` of the double pendulum (point masses, massless rods)."""
     a1, a2, w1, w2 = s
     d = a1 - a2
@@ -35,7 +39,7 @@ def double_pendulum_rhs(t, s, m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81):
     return [w1, w2, (b1 * a22 - a12 * b2) / det, (a11 * b2 - a21 * b1) / det]
 
 
-def double_pendulum_energy(a1, a2, w1, w2, m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81):
+def double_pendulum_energy(a1, a2, w1, w2, m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=G):
     """Total energy (kinetic + potential, zero at the pivot's height)."""
     v2sq = (l1 * w1) ** 2 + (l2 * w2) ** 2 + 2 * l1 * l2 * w1 * w2 * np.cos(a1 - a2)
     y1 = -l1 * np.cos(a1)
@@ -80,7 +84,7 @@ class FourBarGeometry:
         return p2, p3, d2, d3, dd2, dd3
 
 
-def four_bar_rhs(geom: FourBarGeometry, density=1.0, torque=1.0, damping=0.1, g=9.81):
+def four_bar_rhs(geom: FourBarGeometry, density=1.0, torque=1.0, damping=0.1, g=G):
     """The reduced ODE of the torque-driven four-bar with uniform bars (mass
     ``density * L``, ``J = m L^2 / 12`` about the centre). Returns ``f(t, s)``."""
     a, b, c = geom.a, geom.b, geom.c

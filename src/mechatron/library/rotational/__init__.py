@@ -5,14 +5,19 @@ Two-flange components have flanges ``A`` and ``B``: ``w = A.w - B.w`` and ``tau`
 torque flowing into the component at ``A`` (and out at ``B``); ``tau * w > 0`` is power
 absorbed. One-flange components (inertia, reference) have a single flange ``port``; gears
 name their flanges ``A`` (input), ``B`` (output) and ``S`` (support, where it has one).
-Angles, where a component needs them (springs, stops, sensors), are its own states.
+Angles, where a component needs them (springs, stops, sensors), are its own states: A
+relative to B in the older parts (``phi``), B relative to A (MSL's ``phi_rel``) in the
+MSL-named ``SpringDamper`` and ``ElastoBacklash``. ``IdealPlanetary`` has flanges ``sun``,
+``carrier``, ``ring``.
 """
 
 from mechatron.library.rotational.components import (AngularVelocitySensor, IdealGear,
                                                       IdealTorqueSource, Inertia,
                                                       RotationalDamper, RotationalFriction,
                                                       RotationalReference, RotationalSpring)
-from mechatron.library.rotational.gears import LossyGear, SimpleGear
+from mechatron.library.rotational.compliant import ElastoBacklash, SpringDamper
+from mechatron.library.rotational.encoders import HallSensor, IncrementalEncoder
+from mechatron.library.rotational.gears import IdealPlanetary, LossyGear, SimpleGear
 from mechatron.library.rotational.interfaces import Flange, TwoFlange
 from mechatron.library.rotational.nonlinear import (FanLoad, FrictionClutch,
                                                      RotationalBacklash, RotationalHardStop)
@@ -25,4 +30,7 @@ __all__ = ["Flange", "TwoFlange", "Inertia", "RotationalSpring", "RotationalDamp
            "AngularVelocitySensor",
            "RotationalHardStop", "RotationalBacklash", "FrictionClutch", "FanLoad",
            "LossyGear", "SimpleGear", "IdealAngularVelocitySource", "IdealAngleSource",
-           "ConstantTorque", "TorqueSensor", "AngleSensor", "PowerSensor"]
+           "ConstantTorque", "TorqueSensor", "AngleSensor", "PowerSensor",
+           # issue 18
+           "SpringDamper", "ElastoBacklash", "IdealPlanetary", "IncrementalEncoder",
+           "HallSensor"]

@@ -1,10 +1,10 @@
 """Gears with losses: a gear with a support flange and efficiency, and a simple gear
-defined by its teeth."""
+defined by its teeth; the ideal planetary gear set."""
 
 from mechatron.core import Component, Parameter, Variable, if_else
 from mechatron.library.rotational.interfaces import Flange
 
-__all__ = ["LossyGear", "SimpleGear"]
+__all__ = ["LossyGear", "SimpleGear", "IdealPlanetary"]
 
 
 def mesh_torque(tau_a, tau_b, w_a, ratio, eta):
@@ -71,3 +71,30 @@ class SimpleGear(Component):
         return [self.N_A * self.A.w == -self.N_B * self.B.w,
                 mesh_torque(self.A.tau, self.B.tau, self.A.w, r, self.eta) == 0,
                 self.P_loss == self.A.tau * self.A.w + self.B.tau * self.B.w]
+
+
+class IdealPlanetary(Component):
+    """Ideal planetary gear set without losses (MSL's ``IdealPlanetary``): sun, carrier
+    and ring, with ``ratio = z_ring / z_sun`` (number of ring teeth over sun teeth).
+
+    Equations (Willis' relation and the torque balance of a massless, lossless set)::
+
+        (1 + ratio) carrier.w == sun.w + ratio ring.w
+        ring.tau == ratio sun.tau
+        carrier.tau == -(1 + ratio) sun.tau
+
+    so ``sun.tau sun.w + ring.tau ring.w + carrier.tau carrier.w == 0`` (no power lost).
+    With the ring held, ``sun.w / carrier.w = 1 + ratio``. The set has no support: the
+    three shafts may all move (the housing reaction is that of whatever holds them).
+    """
+
+    sun = Flange(doc="Sun gear flange")
+    carrier = Flange(doc="Carrier flange")
+    ring = Flange(doc="Ring gear flange")
+    ratio = Parameter("1", default=100 / 50, min=0,
+                      doc="Number of ring teeth over number of sun teeth")
+
+    def equations(self):
+        return [(1 + self.ratio) * self.carrier.w == self.sun.w + self.ratio * self.ring.w,
+                self.ring.tau == self.ratio * self.sun.tau,
+                self.carrier.tau == -(1 + self.ratio) * self.sun.tau]

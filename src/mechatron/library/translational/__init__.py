@@ -3,7 +3,9 @@
 Two-flange components have flanges ``A`` and ``B``: ``v = A.v - B.v``, ``f`` is the force
 flowing into the component at ``A`` (and out at ``B``); ``f * v > 0`` is power absorbed.
 One-flange components (mass, reference) have a single ``port``. Positions, where a
-component needs them (springs, stops, sensors), are its own states.
+component needs them (springs, stops, sensors), are its own states: A relative to B in
+the older parts (``x``), the length from A to B (MSL's ``s_rel``) in the MSL-named
+``SpringDamper`` and ``ElastoGap``.
 """
 
 from mechatron.library.translational.components import (IdealForceSource, Mass, MotionSensor,
@@ -11,6 +13,7 @@ from mechatron.library.translational.components import (IdealForceSource, Mass, 
                                                          TranslationalFriction,
                                                          TranslationalReference,
                                                          TranslationalSpring)
+from mechatron.library.translational.compliant import ElastoGap, SpringDamper
 from mechatron.library.translational.interfaces import Flange, TwoFlange
 from mechatron.library.translational.nonlinear import PreloadedSpring, TranslationalHardStop
 from mechatron.library.translational.sensors import (AccelerationSensor, ForceSensor,
@@ -25,4 +28,6 @@ __all__ = ["Flange", "TwoFlange", "Mass", "TranslationalSpring", "TranslationalD
            "MotionSensor",
            "TranslationalHardStop", "PreloadedSpring", "IdealVelocitySource",
            "IdealPositionSource", "ConstantForce", "PositionSensor", "VelocitySensor",
-           "AccelerationSensor", "ForceSensor", "TranslationalPowerSensor"]
+           "AccelerationSensor", "ForceSensor", "TranslationalPowerSensor",
+           # issue 18
+           "SpringDamper", "ElastoGap"]
