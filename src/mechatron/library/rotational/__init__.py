@@ -12,6 +12,8 @@ from mechatron.library.rotational.components import (AngularVelocitySensor, Idea
                                                       IdealTorqueSource, Inertia,
                                                       RotationalDamper, RotationalFriction,
                                                       RotationalReference, RotationalSpring)
+from mechatron.library.rotational.friction import (BearingFriction, Brake, Clutch,
+                                                    OneWayClutch, PartialFriction)
 from mechatron.library.rotational.gears import LossyGear, SimpleGear
 from mechatron.library.rotational.interfaces import Flange, TwoFlange
 from mechatron.library.rotational.nonlinear import (FanLoad, FrictionClutch,
@@ -25,4 +27,5 @@ __all__ = ["Flange", "TwoFlange", "Inertia", "RotationalSpring", "RotationalDamp
            "AngularVelocitySensor",
            "RotationalHardStop", "RotationalBacklash", "FrictionClutch", "FanLoad",
            "LossyGear", "SimpleGear", "IdealAngularVelocitySource", "IdealAngleSource",
-           "ConstantTorque", "TorqueSensor", "AngleSensor", "PowerSensor"]
+           "ConstantTorque", "TorqueSensor", "AngleSensor", "PowerSensor",
+           "PartialFriction", "Clutch", "Brake", "OneWayClutch", "BearingFriction"]

@@ -11,6 +11,8 @@ from mechatron.library.translational.components import (IdealForceSource, Mass, 
                                                          TranslationalFriction,
                                                          TranslationalReference,
                                                          TranslationalSpring)
+from mechatron.library.translational.friction import (Brake, MassWithStopAndFriction,
+                                                       PartialFriction, SupportFriction)
 from mechatron.library.translational.interfaces import Flange, TwoFlange
 from mechatron.library.translational.nonlinear import PreloadedSpring, TranslationalHardStop
 from mechatron.library.translational.sensors import (AccelerationSensor, ForceSensor,
@@ -25,4 +27,5 @@ __all__ = ["Flange", "TwoFlange", "Mass", "TranslationalSpring", "TranslationalD
            "MotionSensor",
            "TranslationalHardStop", "PreloadedSpring", "IdealVelocitySource",
            "IdealPositionSource", "ConstantForce", "PositionSensor", "VelocitySensor",
-           "AccelerationSensor", "ForceSensor", "TranslationalPowerSensor"]
+           "AccelerationSensor", "ForceSensor", "TranslationalPowerSensor",
+           "PartialFriction", "SupportFriction", "Brake", "MassWithStopAndFriction"]
