@@ -146,7 +146,9 @@ class Brake(_DiscFriction):
 
 class OneWayClutch(PartialFriction):
     """One-way clutch (freewheel, sprag): free for ``w = A.w - B.w > 0``, locked against
-    ``w < 0`` with no torque limit::
+    ``w < 0`` with no torque limit.
+
+    Equations::
 
         freewheeling (w > 0):  tau = T_drag
         locked:                der(w) = 0, tau <= T_drag (any negative torque is held)

@@ -64,15 +64,19 @@ def stick_slip(mode, w, w_lock, a, tau, scale, tau_fwd, tau_bwd, brk_fwd, brk_bw
     # the torque that keeps it stuck, where a break-away that way is possible
     can_fwd = stuck if blocked_fwd is None else logic_and(stuck, logic_not(blocked_fwd))
     can_bwd = stuck if blocked_bwd is None else logic_and(stuck, logic_not(blocked_bwd))
-    held_fwd = if_else(can_fwd, tau, 0 * tau)
-    held_bwd = if_else(can_bwd, tau, 0 * tau)
-    slip_fwd = if_else(mode == FORWARD, w - w_lock, 0 * w)
-    slip_bwd = if_else(mode == BACKWARD, w - w_lock, 0 * w)
+    # outside their mode the distances are constants of the sign that keeps each
+    # relation false (-1 below brk_fwd >= 0, ...): no events, and no mode left on its
+    # switching surface to be re-read differently at another component's event
+    held_fwd = if_else(can_fwd, tau, -1.0)
+    held_bwd = if_else(can_bwd, tau, 1.0)
+    slip_fwd = if_else(mode == FORWARD, w - w_lock, 1.0)
+    slip_bwd = if_else(mode == BACKWARD, w - w_lock, -1.0)
     out = [0 == if_else(stuck, scale * a, tau - kinetic),
            when(logic_and(can_fwd, held_fwd > brk_fwd), update={mode: FORWARD, w_lock: w}),
            when(logic_and(mode == FORWARD, slip_fwd < 0), update={mode: STUCK, w_lock: w})]
     if brk_bwd is not None:
-        out += [when(logic_and(can_bwd, held_bwd < -brk_bwd), update={mode: BACKWARD, w_lock: w}),
+        out += [when(logic_and(can_bwd, held_bwd < -brk_bwd),
+                     update={mode: BACKWARD, w_lock: w}),
                 when(logic_and(mode == BACKWARD, slip_bwd > 0),
                      update={mode: STUCK, w_lock: w})]
     return out
