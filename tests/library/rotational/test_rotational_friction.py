@@ -231,3 +231,25 @@ def test_bearing_friction_holds_below_break_away_and_slides_with_coulomb_above(s
     dt = 0.4
     w_end = (k * ((t_b + dt) ** 2 - t_b ** 2) / 2 - T_C * dt) / J
     assert res.final("j.w") == pytest.approx(w_end, rel=1e-7)
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+@pytest.mark.parametrize("T", [TO, -TO])
+def test_one_way_clutch_started_at_rest_locks_or_freewheels_at_once(solver, T):
+    """At rest at t = 0 the clutch starts stuck; a torque that turns the inertia forwards
+    (T > 0: ``w = -wB < 0``) is held, one that turns it backwards breaks it free at the
+    initial event."""
+    m = mt.System("oneway0")
+    g = m.add("g", rot.RotationalReference())
+    j = m.add("j", rot.Inertia(J=JO, w=0.0))
+    oc = m.add("oc", rot.OneWayClutch())
+    src = m.add("src", StepTorque(T1=T, T2=T, t_r=10.0))
+    m.connect(g.port, oc.A, src.B)
+    m.connect(oc.B, j.port, src.A)
+    res = mt.simulate(m, 0.5, solver=solver, **TOL)
+    if T > 0:
+        assert np.all(res["j.w"] == 0.0) and np.all(res["oc.mode"] == 0)
+        np.testing.assert_allclose(res["oc.tau"], -T, rtol=1e-12)
+    else:
+        np.testing.assert_allclose(res["j.w"], T / JO * res.t, atol=1e-9)
+        assert np.all(res["oc.mode"] == 1)

@@ -183,3 +183,50 @@ def test_elastic_stop_bounces_with_decreasing_impacts_until_rest(solver):
     assert res.final("body.impacts") == len(t_hit)
     assert res.final("body.stop") == 1 and res.final("body.v") == 0.0
     assert res.event_times["body"] == pytest.approx(t_hit[-1], abs=1e-8)
+
+
+class ForceSteps(TwoFlange):
+    """Force at A: ``F1`` before ``t1``, ``F2`` until ``t2``, ``F3`` after."""
+
+    F1 = mt.Parameter("N", default=1.0, doc="Force before t1")
+    F2 = mt.Parameter("N", default=0.0, doc="Force from t1 to t2")
+    F3 = mt.Parameter("N", default=-1.0, doc="Force after t2")
+    t1 = mt.Parameter("s", default=1.0, doc="First switch")
+    t2 = mt.Parameter("s", default=2.0, doc="Second switch")
+
+    def equations(self):
+        return [self.f == -mt.if_else(self.time < self.t1, self.F1,
+                                      mt.if_else(self.time < self.t2, self.F2, self.F3))]
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_mass_at_a_stop_holds_a_weak_pull_and_leaves_under_a_strong_one(solver):
+    """Pushed into the lower stop (inelastic) by -F_PUSH; from t1 a pull of 5 N (below
+    the break-away force F_brk = 15 N) is held by friction; from t2 a pull of 25 N
+    breaks it away at once: ``m a = 25 - F_C`` from the stop."""
+    F_brk, t1, t2, pull = 15.0, 0.6, 1.0, 25.0
+    m = mt.System("leave")
+    g = m.add("g", tr.TranslationalReference())
+    body = m.add("body", tr.MassWithStopAndFriction(
+        m=M_S, s_min=-S_MAX, s_max=1.0, F_C=F_C, F_brk=F_brk, v_S=0.01))
+    push = m.add("push", ForceSteps(F1=-F_PUSH, F2=5.0, F3=pull, t1=t1, t2=t2))
+    m.connect(body.port, push.A)
+    m.connect(push.B, g.port)
+    # with the Stribeck part the approach is not analytic; it hits before t1:
+    assert np.sqrt(2 * S_MAX * M_S / (F_PUSH - F_brk)) < t1
+    t = np.linspace(0, 1.3, 131)
+    res = mt.simulate(m, 1.3, solver=solver, t_out=t, **TOL)
+    held = (t > t1) & (t < t2)
+    assert np.all(res["body.s"][held] == -S_MAX) and np.all(res["body.v"][held] == 0.0)
+    np.testing.assert_allclose(res["body.f"][held], 5.0, rtol=1e-12)    # friction holds
+    assert np.all(res["body.mode"][held] == 0) and np.all(res["body.stop"][held] == -1)
+    assert res.final("body.impacts") == 1
+    after = t > t2
+    # Stribeck part: F_C + (F_brk - F_C) exp(-(v/v_S)^2) decays within ms; bound the
+    # position between the Coulomb-only motion and the motion under F_brk
+    dt = t[after] - t2
+    hi = -S_MAX + (pull - F_C) / M_S * dt ** 2 / 2
+    lo = -S_MAX + (pull - F_brk) / M_S * dt ** 2 / 2
+    assert np.all(res["body.s"][after] <= hi + 1e-12)
+    assert np.all(res["body.s"][after] >= lo - 1e-12)
+    assert np.all(res["body.mode"][after] == 1) and np.all(res["body.stop"][after] == 0)

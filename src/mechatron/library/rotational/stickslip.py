@@ -5,14 +5,12 @@ discrete variables and ``when`` actions.
 The element has a relative speed ``w``, its derivative ``a`` and a friction torque (or
 force) ``tau`` entering at A. A discrete ``mode`` says which equation holds:
 
-====  =========  ==============================================  ========================
-mode  name       equation                                        leaves it when
-====  =========  ==============================================  ========================
- 1    forward    ``tau = tau_fwd(w)`` (kinetic, >= 0)            ``w`` falls below ``w_lock``
- 0    stuck      ``a = 0``; ``tau`` is the unknown that holds it  ``tau > brk_fwd`` or
-                                                                 ``tau < -brk_bwd``
--1    backward   ``tau = tau_bwd(w)`` (kinetic, <= 0)            ``w`` rises above ``w_lock``
-====  =========  ==============================================  ========================
+- ``mode = 1``, sliding forward: ``tau = tau_fwd(w) >= 0``; it locks when ``w`` falls
+  below ``w_lock``.
+- ``mode = 0``, stuck: ``a = 0`` and ``tau`` is the unknown that holds it; it breaks away
+  forward when ``tau > brk_fwd``, backward when ``tau < -brk_bwd``.
+- ``mode = -1``, sliding backward: ``tau = tau_bwd(w) <= 0``; it locks when ``w`` rises
+  above ``w_lock``.
 
 Both are one equation, ``0 = if stuck: scale * a, else tau - tau_kinetic``, so the
 structure does not change with the mode; ``scale`` (an inertia or a mass) only makes the
@@ -24,9 +22,14 @@ limit there (a clutch whose drive reverses slides on backwards).
 ``w_lock`` is the speed at the last lock or break-away (zero up to the event location
 error, ~1e-14): measuring the slip from it makes a break-away start exactly on the
 switching surface, where the direction of motion decides (no spurious re-lock from a
-residual speed of the wrong sign, left by event location or by rounding while stuck). Every relation is gated by
-the mode it belongs to, so a stuck element generates no events and a sliding one only the
-crossing that matters.
+residual speed of the wrong sign, left by event location or by rounding while stuck).
+Every relation is gated by the mode it belongs to, so a stuck element generates no
+events and a sliding one only the crossing that matters: one event per lock and one per
+break-away.
+
+Limitation: the fixed-step solvers read relations by their sign at the step ends; a
+speed that crosses zero within a step locks at the step end with the overshoot as
+``w_lock``.
 """
 
 from __future__ import annotations
