@@ -253,3 +253,34 @@ def test_one_way_clutch_started_at_rest_locks_or_freewheels_at_once(solver, T):
     else:
         np.testing.assert_allclose(res["j.w"], T / JO * res.t, atol=1e-9)
         assert np.all(res["oc.mode"] == 1)
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_brake_with_a_mu_table_in_rpm_stops_at_the_analytic_time(solver):
+    """``mu(w) = mu0 + c w`` given as a table over rpm: ``J dw/dt = -k (mu0 + c w)`` with
+    ``k = cgeo fn``, so ``w + mu0/c = (w0 + mu0/c) exp(-k c t / J)`` and the stop time is
+    ``J / (k c) ln(1 + c w0 / mu0)``."""
+    mu0, c, w0, fn = 0.2, 0.004, 40.0, 100.0        # c in s/rad
+    rpm = 2 * np.pi / 60
+    table = [(0.0, mu0), (1000.0, mu0 + c * 1000.0 * rpm)]      # speeds in rpm
+    m = mt.System("tabled")
+    g = m.add("g", rot.RotationalReference())
+    j = m.add("j", rot.Inertia(J=JB, w=w0))
+    b = m.add("b", rot.Brake(mu_table=table, w_ref="1 rpm", R=RB, n=NB))
+    f = m.add("f", RampDown(F0=fn, k=0.0))
+    m.connect(j.port, b.A)
+    m.connect(b.B, g.port)
+    m.connect(f.y, b.f_n)
+    k = NB * RB * fn
+    t_stop = JB / (k * c) * np.log(1 + c * w0 / mu0)
+    res = mt.simulate(m, 1.5 * t_stop, solver=solver, **TOL)
+    assert res.event_times["b"] == pytest.approx(t_stop, abs=1e-9)
+    assert abs(res.final("j.w")) < 1e-10
+
+
+def test_friction_tables_are_checked():
+    with pytest.raises(mt.errors.DataError, match=r"Clutch: mu_table must start at speed 0"):
+        rot.Clutch(mu_table=[(1.0, 0.3), (2.0, 0.2)])
+    with pytest.raises(mt.errors.DataError, match=r"BearingFriction: stribeck_table "
+                                                  r"speeds must be strictly increasing"):
+        rot.BearingFriction(stribeck_table=[(0.0, 1.0), (0.0, 0.5)])
