@@ -14,7 +14,8 @@ DOC = Path(__file__).parents[1] / "docs" / "modeling.md"
 def doc():
     text = DOC.read_text()
     start = text.index("## Events and discrete variables")
-    blocks = re.findall(r"```python\n(.*?)```", text[start:], re.S)
+    end = text.index("## Friction with a stuck mode")      # the next sections' own code
+    blocks = re.findall(r"```python\n(.*?)```", text[start:end], re.S)
     assert len(blocks) == 5
     ns: dict = {}
     for block in blocks:

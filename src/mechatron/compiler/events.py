@@ -578,7 +578,7 @@ class Lowering:
         flipped = modes * (1 - 2 * sel * ordinary)
         X1 = ca.vertcat(x, flipped, counters, tlast)
         d0 = f_dist(t, X1, z, p)[0]
-        dref = f_dist(t, X, z, p)[0]
+        dref, ddot_ref = f_dist(t, X, z, p)[:2]
         K = ca.vertcat(t, z, p, tlast, counters, sel, d0, dref, fixed)
         it = self._iterate(f_dist, z.numel(), p.numel())
         Cf = it(ca.vertcat(x, flipped, counters, ca.DM.zeros(2 * nr), 1), K)
@@ -590,7 +590,14 @@ class Lowering:
         looping = Cf[nx + 4 * nr]
         initial = ca.DM([1.0 if op == "initial" else 0.0 for op in self.ops])
         modes_f = initial + (1 - initial) * modes_f          # initial() is over
-        counted = ordinary * ca.logic_or(sel, modes_f != modes)
+        # a relation that crossed at the same instant as the located one counts too,
+        # even when the iteration brings its mode back (a brake that locks: its gated
+        # slip relation returns to its resting mode); such a relation sits on its
+        # surface (to the time the solver resolves) and was moving across it
+        crossing = ca.logic_and(ca.fabs(dref) <= NEAR_TIME * ca.fabs(ddot_ref),
+                                modes * ddot_ref < 0)
+        counted = ordinary * ca.logic_or(ca.logic_or(sel, modes_f != modes),
+                                         (1 - fixed) * crossing)
         cnt_out = cnt_f + counted
         stamped = ca.logic_or(counted, cnt_f != counters)
         te_out = te_f + stamped * (t - te_f)

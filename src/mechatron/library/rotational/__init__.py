@@ -18,6 +18,8 @@ from mechatron.library.rotational.components import (AngularVelocitySensor, Idea
 from mechatron.library.rotational.compliant import ElastoBacklash, SpringDamper
 from mechatron.library.rotational.encoders import HallSensor, IncrementalEncoder
 from mechatron.library.rotational.gears import IdealPlanetary, LossyGear, SimpleGear
+from mechatron.library.rotational.friction import (BearingFriction, Brake, Clutch,
+                                                    OneWayClutch, PartialFriction)
 from mechatron.library.rotational.interfaces import Flange, TwoFlange
 from mechatron.library.rotational.nonlinear import (FanLoad, FrictionClutch,
                                                      RotationalBacklash, RotationalHardStop)
@@ -31,6 +33,6 @@ __all__ = ["Flange", "TwoFlange", "Inertia", "RotationalSpring", "RotationalDamp
            "RotationalHardStop", "RotationalBacklash", "FrictionClutch", "FanLoad",
            "LossyGear", "SimpleGear", "IdealAngularVelocitySource", "IdealAngleSource",
            "ConstantTorque", "TorqueSensor", "AngleSensor", "PowerSensor",
-           # issue 18
            "SpringDamper", "ElastoBacklash", "IdealPlanetary", "IncrementalEncoder",
-           "HallSensor"]
+           "HallSensor",
+           "PartialFriction", "Clutch", "Brake", "OneWayClutch", "BearingFriction"]

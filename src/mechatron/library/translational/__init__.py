@@ -14,6 +14,8 @@ from mechatron.library.translational.components import (IdealForceSource, Mass, 
                                                          TranslationalReference,
                                                          TranslationalSpring)
 from mechatron.library.translational.compliant import ElastoGap, SpringDamper
+from mechatron.library.translational.friction import (Brake, MassWithStopAndFriction,
+                                                       PartialFriction, SupportFriction)
 from mechatron.library.translational.interfaces import Flange, TwoFlange
 from mechatron.library.translational.nonlinear import PreloadedSpring, TranslationalHardStop
 from mechatron.library.translational.sensors import (AccelerationSensor, ForceSensor,
@@ -29,5 +31,5 @@ __all__ = ["Flange", "TwoFlange", "Mass", "TranslationalSpring", "TranslationalD
            "TranslationalHardStop", "PreloadedSpring", "IdealVelocitySource",
            "IdealPositionSource", "ConstantForce", "PositionSensor", "VelocitySensor",
            "AccelerationSensor", "ForceSensor", "TranslationalPowerSensor",
-           # issue 18
-           "SpringDamper", "ElastoGap"]
+           "SpringDamper", "ElastoGap",
+           "PartialFriction", "SupportFriction", "Brake", "MassWithStopAndFriction"]
