@@ -61,6 +61,34 @@ def choose_plugin(cm: CompiledModel, solver: str) -> str:
     return plugin
 
 
+def held_states(cm: CompiledModel) -> list[int]:
+    """Entries of ``X`` held constant between events: discrete states (``der = 0``), the
+    relations' modes, event counters and event times."""
+    cached = cm._cache.get("held")
+    if cached is None:
+        t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
+        z, p = ca.SX.sym("z", cm.nz), ca.SX.sym("p", cm.p0.size)
+        rhs = cm.f_ode(t, X, z, p)
+        cached = cm._cache["held"] = [k for k in range(cm.nX) if rhs[k].is_zero()]
+    return cached
+
+
+def _hide(X: ca.MX, held: list[int]) -> ca.MX:
+    """``X`` with its held entries cut from differentiation.
+
+    A Rosenbrock step solves ``(I/(h gamma) - J) U = F + ...`` by a QR factorization; the
+    columns of ``J`` for held states (a PWM's latched switch-off time, the relations'
+    modes) mix the rounding of the other rows into their stage values, so a held state
+    used to drift by a few ulps per step (a mode of 0.9999999999999994 then counted as an
+    event by the transition, a counter above 0 taken for a recent event). Its stage
+    values are zero exactly anyway (its row of ``F`` is zero and its row of ``J`` too), so
+    dropping those columns leaves the step unchanged and makes ``U = 0`` exact."""
+    parts = [X[k] for k in range(X.numel())]
+    for k in held:
+        parts[k] = ca.stop_diff(parts[k], 1)
+    return ca.vertcat(*parts)
+
+
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
                 atol: float, max_step: float | None, drive: tuple = ()) -> ca.Function:
     # drive: (p slot, table length) of each external input given as a table; the tables
@@ -70,21 +98,24 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     cached = cm._cache.get(key)
     if cached is not None:
         return cached
-    S = ca.MX if drive else ca.SX   # MX passes input tables as blocks, not elements
+    held = held_states(cm) if plugin == "rosenbrock" else []
+    # MX passes input tables as blocks, not elements, and can hide held states from AD
+    S = ca.MX if drive or held else ca.SX
     t = S.sym("t")
     # SUNDIALS needs at least one state: a model of algebraic equations only gets a
     # constant dummy state (dropped again by integrate_variable)
     pad = 1 if cm.nX == 0 else 0
     Xi = S.sym("X", cm.nX + pad)
     X = Xi[:cm.nX]
+    Xd = _hide(X, held) if held else X     # X as the step's Jacobian sees it
     z = S.sym("z", cm.nz)
     p = S.sym("p", cm.p0.size + 2 * sum(n for _, n in drive))
     pe = driven_parameters(cm.p0.size, t, p, drive) if drive else p
     u = S.sym("u", 0)
     empty = S(0, 1)
-    outs = [ca.vertcat(cm.f_ode(t, X, z, pe), S.zeros(pad)),
-            cm.f_alg(t, X, z, pe) if cm.nz else empty, empty,
-            cm.f_zero(t, X, z, pe) if cm.nr else empty]
+    outs = [ca.vertcat(cm.f_ode(t, Xd, z, pe), S.zeros(pad)),
+            cm.f_alg(t, Xd, z, pe) if cm.nz else empty, empty,
+            cm.f_zero(t, Xd, z, pe) if cm.nr else empty]
     dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
