@@ -116,6 +116,7 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     outs = [ca.vertcat(cm.f_ode(t, Xd, z, pe), S.zeros(pad)),
             cm.f_alg(t, Xd, z, pe) if cm.nz else empty, empty,
             cm.f_zero(t, Xd, z, pe) if cm.nr else empty]
+    outs = [ca.densify(o) for o in outs]
     dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
