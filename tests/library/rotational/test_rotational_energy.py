@@ -24,7 +24,7 @@ class EnergyMeter(mt.Component):
 @pytest.mark.parametrize("solver", [
     "rk45",
     "rosenbrock",   # held modes exact (solvers.variable.held_states)
-    "auto"])   # fixed by h4: 'auto' uses rk45 for ODE models with events
+    "auto"])
 def test_input_energy_equals_dissipated_plus_stored(solver):
     J1, J2, J3, k, D, ratio, eta = 0.01, 0.02, 0.05, 50.0, 0.05, 2.5, 0.85
     m = mt.System("train")
