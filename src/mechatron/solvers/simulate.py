@@ -28,7 +28,7 @@ DEFAULT_POINTS = 1001
 def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = None,
              params: dict | None = None, inputs=None, rtol: float = 1e-6,
              atol: float = 1e-8, t_out=None, t0: float = 0.0, iterations: int = 3,
-             max_step: float | None = None) -> SimResult:
+             max_step: float | None = None, newton: str = "check") -> SimResult:
     """Simulate a model and log every variable.
 
     Parameters
@@ -59,7 +59,14 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         Output times of a variable-step run (default: 1001 points); fixed-step runs log
         every step.
     iterations : int
-        Newton iterations per step of the implicit fixed-step methods.
+        Newton iterations per step of the implicit fixed-step methods (and of the
+        algebraic unknowns of any fixed-step method).
+    newton : {"check", "count"}
+        What a fixed-step run does when ``iterations`` Newton iterations leave a step
+        unconverged: ``"check"`` (default) raises a
+        :class:`~mechatron.errors.SimulationError` naming the time and the unknowns;
+        ``"count"`` keeps the fixed count, as a real-time target does, and reports the
+        number of such steps in ``stats.unconverged_steps``.
     max_step : float, optional
         Largest step of the variable-step solvers (for models with events, by default a
         fiftieth of the simulated time, or half the shortest time scale a component
@@ -97,8 +104,9 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     clock = _time.perf_counter()
     X0, z0, init_report = initialize(cm, p if ext is None else ext.columns(p, t0)[:, 0], t0)
     if solver in METHODS:
-        t, Y, Xf = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p, method=solver,
-                                   iterations=iterations, inputs=ext)
+        t, Y, Xf, unconverged = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p,
+                                                method=solver, iterations=iterations,
+                                                inputs=ext, newton=newton)
         n = len(t) - 1
         if t_out is not None:
             t_req = np.asarray(t_out, dtype=float)
@@ -106,7 +114,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
             t = t_req
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
                             rhs_evals=n * _stages(solver), jac_evals=0,
-                            solver_reason="asked for")
+                            solver_reason="asked for", unconverged_steps=unconverged)
     elif solver == "rodas4":
         grid = _grid(cm, t0, t_stop, t_out)
         Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
