@@ -153,7 +153,10 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         bad = [cm.names[i] for i in np.nonzero(~np.isfinite(Y[:, -1]))[0][:5]]
         raise SimulationError(f"model '{cm.name}': the solution is not finite at "
                               f"t = {t[-1]:g} s ({', '.join(bad)}). The step may be too "
-                              "large for a fixed-step solver, or the model unstable.",
+                              "large for a fixed-step solver, or the model unstable"
+                              + (f" ({stats.unconverged_steps} step(s) left Newton's "
+                                 "iteration unconverged)" if stats.unconverged_steps
+                                 else "") + ".",
                               path=cm.name, variables=bad)
     res = SimResult(t, Y, cm.names, cm.units, stats=stats, model_name=cm.name,
                     descriptions={n: d for n, d in zip(cm.names, cm.docs) if d})
