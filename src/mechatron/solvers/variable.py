@@ -83,10 +83,24 @@ def _hide(X: ca.MX, held: list[int]) -> ca.MX:
     event by the transition, a counter above 0 taken for a recent event). Its stage
     values are zero exactly anyway (its row of ``F`` is zero and its row of ``J`` too), so
     dropping those columns leaves the step unchanged and makes ``U = 0`` exact."""
-    parts = [X[k] for k in range(X.numel())]
-    for k in held:
-        parts[k] = ca.stop_diff(parts[k], 1)
-    return ca.vertcat(*parts)
+    n = X.numel()
+    rows = [k for k in range(n) if k not in set(held)]
+    keep = ca.DM(ca.Sparsity.triplet(n, 1, rows, [0] * len(rows)), 1.0)
+    cut = ca.DM(ca.Sparsity.triplet(n, 1, list(held), [0] * len(held)), 1.0)
+    return keep * X + ca.stop_diff(cut * X, 1)
+
+
+def _model(cm: CompiledModel) -> ca.Function:
+    """``(t, X, z, p) -> (ode, alg, zero)`` as one SX function (one call in an MX graph)."""
+    fn = cm._cache.get("dae_sx")
+    if fn is None:
+        t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
+        z, p = ca.SX.sym("z", cm.nz), ca.SX.sym("p", cm.p0.size)
+        outs = [cm.f_ode(t, X, z, p), cm.f_alg(t, X, z, p) if cm.nz else ca.SX(0, 1),
+                cm.f_zero(t, X, z, p) if cm.nr else ca.SX(0, 1)]
+        fn = cm._cache["dae_sx"] = ca.Function("model", [t, X, z, p],
+                                               [ca.densify(o) for o in outs])
+    return fn
 
 
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
@@ -113,9 +127,14 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     pe = driven_parameters(cm.p0.size, t, p, drive) if drive else p
     u = S.sym("u", 0)
     empty = S(0, 1)
-    outs = [ca.vertcat(cm.f_ode(t, Xd, z, pe), S.zeros(pad)),
-            cm.f_alg(t, Xd, z, pe) if cm.nz else empty, empty,
-            cm.f_zero(t, Xd, z, pe) if cm.nr else empty]
+    if S is ca.MX:
+        ode, alg, zero = _model(cm)(t, Xd, z, pe)
+    else:
+        ode = cm.f_ode(t, X, z, pe)
+        alg = cm.f_alg(t, X, z, pe) if cm.nz else empty
+        zero = cm.f_zero(t, X, z, pe) if cm.nr else empty
+    outs = [ca.vertcat(ode, S.zeros(pad)), alg if cm.nz else empty, empty,
+            zero if cm.nr else empty]
     outs = [ca.densify(o) for o in outs]
     dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
