@@ -27,10 +27,12 @@ import bench_multibody
 import bench_pwm
 import bench_realtime
 import bench_scaling
+import bench_stiff_contact
 
 BENCHMARKS = {"dc_motor": bench_dc_motor.run, "pwm": bench_pwm.run, "scaling": bench_scaling.run,
               "codegen": bench_codegen.run, "realtime": bench_realtime.run,
-              "multibody": bench_multibody.run, "estimation": bench_estimation.run}
+              "multibody": bench_multibody.run, "estimation": bench_estimation.run,
+              "stiff_contact": bench_stiff_contact.run}
 
 
 def _summary(results: dict) -> dict:
@@ -86,6 +88,12 @@ def _summary(results: dict) -> dict:
                    "simulate_s": mb[case]["mechatron"]["simulate"]["median_s"],
                    **{name: b["time"]["median_s"] for name, b in mb[case]["scipy"].items()}}
             for case in ("double_pendulum", "four_bar")}
+    sc = results.get("stiff_contact")
+    if sc and "error" not in sc:
+        out["stiff_contact"] = {"solver": sc["solver"], "median_s": sc["wall"]["median_s"],
+                                "steps": sc["steps"], "events": sc["events"],
+                                "max_rel_error": sc["max_rel_error"],
+                                "meets_goals": sc["meets_goals"]}
     cg = results.get("codegen")
     if cg and "error" not in cg:
         out["codegen"] = {"dc_motor_rk4_ns": cg["dc_motor_rk4_ns"], "goal_ns": cg["goal_ns"],
