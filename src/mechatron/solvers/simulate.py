@@ -17,7 +17,7 @@ from mechatron.solvers.inputs import resolve_inputs
 from mechatron.solvers.logging import evaluate_outputs
 from mechatron.solvers.native import integrate_native, native_library
 from mechatron.solvers.stiffness import probe
-from mechatron.solvers.variable import PLUGINS, integrate_variable
+from mechatron.solvers.variable import PLUGINS, consistent_algebraics, integrate_variable
 
 __all__ = ["simulate", "SOLVERS"]
 
@@ -134,8 +134,10 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
             plugin, reason = choose_auto(cm, t0, t_stop, X0, z0, p_t0, h_max)
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
                                             atol=atol, max_step=h_max, inputs=ext)
-        Y = evaluate_outputs(cm, grid, X, Z,
-                             p if ext is None else ext.logged_columns(p, grid))
+        p_log = p if ext is None else ext.logged_columns(p, grid)
+        if cm.nz and Z.size:
+            Z = consistent_algebraics(cm, grid, X, Z, p_log, used)
+        Y = evaluate_outputs(cm, grid, X, Z, p_log)
         t, Xf = grid, X[:, -1]
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
             t, Y = t[1:], Y[:, 1:]
