@@ -150,3 +150,13 @@ def test_algebraic_unknowns_hold_their_equation_at_every_output_time():
     # the logged values are solved to convergence
     np.testing.assert_allclose(res["y"] + np.exp(res["y"]), 2 + res["x"], rtol=0,
                                atol=1e-12)
+
+
+def test_a_discrete_controller_output_that_settles_at_zero_is_exactly_zero():
+    # the encoder servo stops on a whole count: the sampled controller's error, and so its
+    # output (a discrete state), is exactly 0 from then on; a drifting held state used to
+    # end at -6.7e-32
+    entry = mt.models.get("servo_encoder")
+    res = mt.simulate(entry.build(), 0.1, solver="rosenbrock", rtol=1e-10, atol=1e-12)
+    assert res.final("controller.y") == 0.0
+    assert abs(res.final("rotor.w")) < 1e-9
