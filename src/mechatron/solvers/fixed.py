@@ -138,7 +138,9 @@ def _euler_extrapolation(f, t, x0, z, h: float, sequence, iterations: int, error
                 jx, rx = ca.substitute([jac, resid], [xs], [xn])
                 xn = xn - ca.solve(jx, rx)
             if errors is not None:
-                jx, rx = ca.substitute([jac, resid], [xs], [xn])
+                # the next correction with the last iteration's Jacobian (its
+                # factorization is shared once the function is built with cse)
+                rx = ca.substitute(resid, xs, xn)
                 errors.append(_scaled(ca.solve(jx, rx), xn, xk))
             xk = xn
         row = [xk]
@@ -214,7 +216,7 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3, *,
             jx, rx = ca.substitute([jac, resid], [xs], [x1])
             x1 = x1 - ca.solve(jx, rx)
         if check:
-            jx, rx = ca.substitute([jac, resid], [xs], [x1])
+            rx = ca.substitute(resid, xs, x1)
             e_x = _scaled(ca.solve(jx, rx), x1, x0)
     z1 = _newton_z(cm, t + h, ca.vertcat(x1, rest), z if nz else zg, p, iterations) \
         if nz else zg
@@ -240,7 +242,7 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3, *,
         e_z = _z_error(cm, t + h, ca.vertcat(x1, rest), z1, p) if nz else ca.SX(0, 1)
         step = ca.Function(f"step_{method}", [Xa, u, p, t],
                            [ca.vertcat(Xn, z1), y, ca.vertcat(e_x, e_z)],
-                           ["x", "u", "p", "t"], ["x_next", "y", "newton"])
+                           ["x", "u", "p", "t"], ["x_next", "y", "newton"], {"cse": True})
     else:
         step = ca.Function(f"step_{method}", [Xa, u, p, t], [ca.vertcat(Xn, z1), y],
                            ["x", "u", "p", "t"], ["x_next", "y"])
