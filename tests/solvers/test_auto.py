@@ -92,12 +92,6 @@ def test_non_stiff_model_with_events_runs_dormand_prince():
     assert first.event_times[""] == pytest.approx(t_first, abs=1e-8)
 
 
-def test_without_events_auto_runs_bdf():
-    res = mt.simulate(Smooth(), 1.0)
-    assert res.stats.solver == "cvodes"
-    assert "no events" in res.stats.solver_reason
-
-
 class Smooth(mt.Component):
     """``x' = -x``."""
 
@@ -105,6 +99,12 @@ class Smooth(mt.Component):
 
     def equations(self):
         return [mt.der(self.x) == -self.x]
+
+
+def test_without_events_auto_runs_bdf():
+    res = mt.simulate(Smooth(), 1.0)
+    assert res.stats.solver == "cvodes"
+    assert "no events" in res.stats.solver_reason
 
 
 def test_a_solver_asked_for_says_so():
