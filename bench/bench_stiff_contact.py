@@ -47,6 +47,20 @@ T_STOP = 1.0
 class StiffContact(mt.Component):
     """Plunger, preloaded poppet on its seat, stiff contacts, Stribeck friction."""
 
+    m1 = mt.Parameter("kg", default=M1, doc="Plunger mass")
+    m2 = mt.Parameter("kg", default=M2, doc="Poppet mass")
+    k1 = mt.Parameter("N/m", default=K1, doc="Return spring of the plunger")
+    k2 = mt.Parameter("N/m", default=K2, doc="Poppet spring")
+    F_pre = mt.Parameter("N", default=F_PRE, doc="Preload of the poppet spring")
+    k_c = mt.Parameter("N/m", default=K_C, doc="Contact stiffness")
+    d_c = mt.Parameter("N*s/m", default=D_C, doc="Contact damping")
+    g0 = mt.Parameter("m", default=G0, doc="Gap between plunger and poppet at rest")
+    F0 = mt.Parameter("N", default=F0, doc="Peak drive force")
+    f = mt.Parameter("Hz", default=FREQ, doc="Drive frequency")
+    F_brk = mt.Parameter("N", default=F_BRK, doc="Breakaway friction force")
+    F_C = mt.Parameter("N", default=F_C, doc="Coulomb friction force")
+    v_brk = mt.Parameter("m/s", default=V_BRK, doc="Breakaway velocity")
+    b = mt.Parameter("N*s/m", default=B, doc="Viscous friction coefficient")
     x1 = mt.Variable("m", start=-G0, doc="Plunger position")
     v1 = mt.Variable("m/s", start=0.0, doc="Plunger velocity")
     x2 = mt.Variable("m", start=-F_PRE / K_C, doc="Poppet position (seat at 0)")
@@ -56,25 +70,30 @@ class StiffContact(mt.Component):
     f_fric = mt.Variable("N", doc="Friction force on the plunger")
 
     def equations(self):
-        v_st = V_BRK * np.sqrt(2.0)
+        x = self.v1 / (self.v_brk * np.sqrt(2.0))
+        drive = self.F0 * (1 - ca.cos(2 * np.pi * self.f * self.time)) / 2
         return [
             mt.der(self.x1) == self.v1,
             mt.der(self.x2) == self.v2,
-            self.f12 == penalty_force(self.x1 - self.x2, self.v1 - self.v2, K_C, D_C),
-            self.f_seat == penalty_force(-self.x2, -self.v2, K_C, D_C),
-            self.f_fric == stribeck(self.v1, v_st, ca),
-            M1 * mt.der(self.v1) == F0 * (1 - ca.cos(2 * np.pi * FREQ * self.time)) / 2
-            - K1 * (self.x1 + G0) - self.f_fric - self.f12,
-            M2 * mt.der(self.v2) == self.f12 + self.f_seat - F_PRE - K2 * self.x2,
+            self.f12 == penalty_force(self.x1 - self.x2, self.v1 - self.v2, self.k_c,
+                                      self.d_c),
+            self.f_seat == penalty_force(-self.x2, -self.v2, self.k_c, self.d_c),
+            # Simscape's Stribeck law, as stribeck() below and TranslationalFriction
+            self.f_fric == (np.sqrt(2 * np.e) * (self.F_brk - self.F_C) * ca.exp(-x ** 2) * x
+                            + self.F_C * ca.tanh(self.v1 / (self.v_brk / 10))
+                            + self.b * self.v1),
+            self.m1 * mt.der(self.v1) == drive - self.k1 * (self.x1 + self.g0)
+            - self.f_fric - self.f12,
+            self.m2 * mt.der(self.v2) == self.f12 + self.f_seat - self.F_pre
+            - self.k2 * self.x2,
         ]
 
 
-def stribeck(v, v_st, lib):
-    """Simscape's smooth Stribeck-Coulomb-viscous law (``TranslationalFriction``);
-    ``lib`` is ``casadi`` or ``numpy``."""
+def stribeck(v, v_st):
+    """Simscape's smooth Stribeck-Coulomb-viscous law (``TranslationalFriction``)."""
     x = v / v_st
-    return (np.sqrt(2 * np.e) * (F_BRK - F_C) * lib.exp(-x ** 2) * x
-            + F_C * lib.tanh(v / (V_BRK / 10)) + B * v)
+    return (np.sqrt(2 * np.e) * (F_BRK - F_C) * np.exp(-x ** 2) * x
+            + F_C * np.tanh(v / (V_BRK / 10)) + B * v)
 
 
 def reference(t_eval: np.ndarray) -> np.ndarray:
@@ -97,7 +116,7 @@ def reference(t_eval: np.ndarray) -> np.ndarray:
         f12 = s[1] if sigma[0] > 0 and sigma[1] > 0 else 0.0
         f_seat = s[3] if sigma[2] > 0 and sigma[3] > 0 else 0.0
         force = F0 * (1 - np.cos(2 * np.pi * FREQ * t)) / 2 - K1 * (x1 + G0)
-        return [v1, (force - stribeck(v1, v_st, np) - f12) / M1,
+        return [v1, (force - stribeck(v1, v_st) - f12) / M1,
                 v2, (f12 + f_seat - F_PRE - K2 * x2) / M2]
 
     def crossing(k):

@@ -69,14 +69,17 @@ def test_the_probe_estimates_the_explicit_stability_bound():
 
 
 class Bouncer(mt.Component):
-    """A non-stiff oscillator with a switched force: ``x'' = -w^2 x - F sign(x)``."""
+    """A non-stiff oscillator with a switched force: ``x'' = -w^2 x - a sign(x)``."""
 
+    w2 = mt.Parameter("1/s^2", default=4.0, doc="Squared angular frequency")
+    a = mt.Parameter("m/s^2", default=0.5, doc="Switched acceleration")
     x = mt.Variable("m", start=1.0, doc="Position")
     v = mt.Variable("m/s", start=0.0, doc="Velocity")
 
     def equations(self):
         return [mt.der(self.x) == self.v,
-                mt.der(self.v) == -4.0 * self.x - mt.if_else(self.x > 0, 0.5, -0.5)]
+                mt.der(self.v) == -self.w2 * self.x - mt.if_else(self.x > 0, self.a,
+                                                                 -self.a)]
 
 
 def test_non_stiff_model_with_events_runs_dormand_prince():
