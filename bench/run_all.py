@@ -32,6 +32,7 @@ import bench_multibody
 import bench_pwm
 import bench_realtime
 import bench_scaling
+import bench_stiff_contact
 import bench_subsystems
 
 BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
@@ -39,7 +40,8 @@ BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
               "codegen": bench_codegen.run, "realtime": bench_realtime.run,
               "multibody": bench_multibody.run, "estimation": bench_estimation.run,
               "dimensions": bench_dimensions.run, "subsystems": bench_subsystems.run,
-              "events": bench_events.run}
+              "events": bench_events.run,
+              "stiff_contact": bench_stiff_contact.run}
 
 #: Goals of issue 17 for the RC ladder: compile seconds by N, and simulation at least
 #: twice as fast as the SciPy peer (ratio peer / Mechatron >= 2) at these N.
@@ -113,6 +115,12 @@ def _summary(results: dict) -> dict:
         out["dimensions"] = {"share_of_compile": {r["n"]: r["share_of_compile"]["median"]
                                                   for r in dm["rows"]},
                              "goal_share": dm["goal_share"]}
+    sc = results.get("stiff_contact")
+    if sc and "error" not in sc:
+        out["stiff_contact"] = {"solver": sc["solver"], "median_s": sc["wall"]["median_s"],
+                                "steps": sc["steps"], "events": sc["events"],
+                                "max_rel_error": sc["max_rel_error"],
+                                "meets_goals": sc["meets_goals"]}
     cg = results.get("codegen")
     if cg and "error" not in cg:
         out["codegen"] = {"dc_motor_rk4_ns": cg["dc_motor_rk4_ns"], "goal_ns": cg["goal_ns"],
@@ -263,11 +271,22 @@ def _rows_events(r: dict) -> list[dict]:
                  rodas["us_per_event"] / auto["us_per_event"])]
 
 
+def _rows_stiff_contact(r: dict) -> list[dict]:
+    rk = r.get("rk45") or {}
+    return [_row(f"stiff preloaded contact, auto ({r['solver']})", "s",
+                 r["wall"]["median_s"], "rk45 (explicit)" if rk else None,
+                 rk.get("wall_s"),
+                 rk["wall_s"] / r["wall"]["median_s"] if rk else None,
+                 goal="< 0.5 s, rel. error < 1e-4",
+                 met=bool(r["meets_goals"]))]
+
+
 TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_pwm,
               "scaling": _rows_scaling, "codegen": _rows_codegen,
               "realtime": _rows_realtime, "multibody": _rows_multibody,
               "estimation": _rows_estimation, "dimensions": _rows_dimensions,
-              "subsystems": _rows_subsystems, "events": _rows_events}
+              "subsystems": _rows_subsystems, "events": _rows_events,
+              "stiff_contact": _rows_stiff_contact}
 
 
 def table(results: dict) -> list[dict]:

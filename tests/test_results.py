@@ -321,10 +321,17 @@ def test_stats_as_dict(stats: SolverStats):
     d = stats.as_dict()
     assert d == {"solver": "RK4", "steps": 100, "rejected_steps": 3, "rhs_evals": 400,
                  "jac_evals": 7, "events": {"motor.stop": 2}, "wall_time": 0.0125,
-                 "compile_time": 0.5}
+                 "compile_time": 0.5, "solver_reason": "", "unconverged_steps": 0}
     d["events"]["motor.stop"] = 99
     assert stats.events == {"motor.stop": 2}
     assert SolverStats.from_dict(stats.as_dict()) == stats
+
+
+def test_stats_read_by_name(stats: SolverStats):
+    assert stats["solver"] == "RK4" and stats["steps"] == 100
+    assert stats["unconverged_steps"] == 0
+    with pytest.raises(KeyError):
+        stats["bogus"]
 
 
 def test_stats_defaults():

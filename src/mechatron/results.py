@@ -80,6 +80,15 @@ class SolverStats:
         Wall-clock time of compiling the model for this run, in s (with
         ``solver="rodas4"``, building or loading its C library included); ``None`` when
         nothing was compiled for the run.
+    solver_reason : str, optional
+        Why this solver ran: what ``solver="auto"`` found (events, algebraic unknowns,
+        the stiffness probe's figures), or that it was asked for.
+    unconverged_steps : int, optional
+        Steps of an implicit fixed-step method whose Newton iteration had not converged
+        after the fixed iteration count (only counted with ``newton="fixed"``, the
+        real-time setting; otherwise such a step is an error).
+
+    The fields can also be read by name, ``stats["solver"]``.
     """
 
     solver: str
@@ -90,6 +99,13 @@ class SolverStats:
     events: dict[str, int] = field(default_factory=dict)
     wall_time: float = 0.0
     compile_time: float | None = None
+    solver_reason: str = ""
+    unconverged_steps: int = 0
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in {f.name for f in dataclasses.fields(self)}:
+            raise KeyError(key)
+        return getattr(self, key)
 
     def as_dict(self) -> dict[str, Any]:
         """Return the statistics as a plain, JSON-serialisable dictionary.

@@ -1,5 +1,7 @@
 """Consistent initialization with start-value priorities."""
 
+import casadi as ca
+import numpy as np
 import pytest
 
 import mechatron as mt
@@ -59,3 +61,41 @@ def test_state_start_values_are_used_and_reported():
     assert res["j.w"][0] == pytest.approx(w0)
     assert res.final("j.w") == pytest.approx(w0 * math.exp(-4.0 / 2.0), rel=1e-8)
     assert res.initialization[0]["variable"] == "j.w" and res.initialization[0]["met"]
+
+
+class _Loop(mt.Component, partial=True):
+    """Test-only: a state and an algebraic unknown of a nonlinear implicit equation."""
+
+    x = mt.Variable("1", start=0.5, doc="State")
+    y = mt.Variable("1", start=0.3, doc="Algebraic unknown")
+
+
+class ImplicitRoot(_Loop):
+    def equations(self):
+        return [mt.der(self.x) == -self.y, self.y + ca.exp(self.y) == 2 + self.x]
+
+
+class NoRealRoot(_Loop):
+    def equations(self):
+        return [mt.der(self.x) == -self.y, self.y * self.y + 1 == 0.1 * ca.sin(self.x)]
+
+
+def test_a_converged_initial_point_solves_the_algebraic_equation():
+    cm = mt.compile_model(ImplicitRoot())
+    assert cm.alg_names == ["y"]
+    res = mt.simulate(cm, 0.1)
+    # x has no priority: the least-deviation point moves x and y together onto the curve
+    x0, y0 = res["x"][0], res["y"][0]
+    assert y0 + np.exp(y0) == pytest.approx(2 + x0, abs=1e-8)
+    assert res.initialization == []
+
+
+def test_an_initial_point_that_does_not_converge_names_the_equation_not_a_conflict():
+    # y^2 + 1 = 0.1 sin(x) has no real root: no target conflicts, the solve cannot
+    # converge, and the message says so instead of "conflicting targets: unknown"
+    with pytest.raises(InitializationError,
+                       match=r"'NoRealRoot': the initial point did not converge at t0 = 0 s "
+                             r"\(IPOPT: .*\); largest residuals: algebraic equation 1 "
+                             r"\(for y\) \(residual 0\.9\)\. Give start values closer") as e:
+        mt.simulate(NoRealRoot(), 0.1)
+    assert e.value.variables == ["y"]

@@ -21,6 +21,14 @@ model outputs at the sample times of an experiment, as a function of the paramet
   exact derivatives of the discrete trajectory, in one native pass. (CasADi's own AD
   through the rootfinder gives the same numbers, several times slower; the tests compare
   the two.)
+* Convergence: after the rootfinder, each substep computes the correction one more
+  Newton iteration would make, per stage value, in units of
+  ``1e-10 + 1e-6 |K| + 1e-3 |K - x|`` (as the fixed-step solvers,
+  :data:`mechatron.solvers.fixed.NEWTON_ATOL`); the largest per state and sample comes
+  out with the trajectory, and a value above 1 is a
+  :class:`~mechatron.errors.SimulationError` naming the sample interval and the states,
+  never a result (an unconverged stage once gave a speed of 147 rad/s where 23.7 was
+  right, and the fit was silently wrong).
 * One sample step is mapped over the experiment with ``mapaccum`` (a native loop) and the
   outputs are evaluated on every sample with ``map``. No Python runs per step.
 
@@ -38,8 +46,9 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
-from mechatron.errors import DataError, ModelError
+from mechatron.errors import DataError, ModelError, SimulationError
 from mechatron.estimation.native import native
+from mechatron.solvers.fixed import NEWTON_ATOL, NEWTON_RTOL, NEWTON_STEP
 
 __all__ = ["Trajectory", "fastest_time_constant", "choose_substeps", "check_model"]
 
@@ -185,10 +194,26 @@ class Trajectory:
         args = [self._x, self._p, self._u0, self._u1, self._h, self._ts, self._fa,
                 self._hf]
         g = ca.Function("radau_residual", [K, ca.vertcat(*args)], [self._res])
+        self._newton = ca.Function("radau_correction", [K, ca.vertcat(*args)],
+                                   [ca.solve(ca.jacobian(self._res, K), self._res)])
         self._solve = ca.rootfinder("radau", "fast_newton", g,
                                     {"abstol": self.newton_tol, "max_iter": 30,
                                      "error_on_fail": False})
         self._args = args
+
+    def _substep(self, xi, args):
+        """One Radau substep from ``xi``: the new state and, per state, the scaled
+        correction one more Newton iteration would make (largest over the stages)."""
+        nx, ns = self.cm.nx, len(_C)
+        K = self._solve(ca.repmat(xi, ns, 1), args)
+        delta = self._newton(K, args)
+        X0 = ca.repmat(xi, ns, 1)
+        tol = NEWTON_ATOL + NEWTON_RTOL * ca.fabs(K) + NEWTON_STEP * ca.fabs(K - X0)
+        err = ca.fabs(delta) / tol
+        e = err[:nx]
+        for i in range(1, ns):
+            e = ca.fmax(e, err[i * nx:(i + 1) * nx])
+        return K, e
 
     def _h_frac_sym(self):
         # the substep length as a fraction of the sample interval
@@ -226,26 +251,54 @@ class Trajectory:
         h = ca.SX.sym("h_sample")
         tk = ca.SX.sym("tk")
         xi = x
+        e = ca.DM.zeros(nx, 1)
         for j in range(m):
-            K = self._solve(ca.repmat(xi, len(_C), 1),
-                            ca.vertcat(xi, p, u0, u1, h / m, tk + j * h / m, j / m, 1 / m))
+            K, ej = self._substep(xi, ca.vertcat(xi, p, u0, u1, h / m, tk + j * h / m,
+                                                 j / m, 1 / m))
             xi = K[-nx:]
-        step = ca.Function("sample_step", [x, ca.vertcat(p, u0, u1, h, tk)], [xi])
+            e = ca.fmax(e, ej)
+        step = ca.Function("sample_step", [x, ca.vertcat(p, u0, u1, h, tk)], [xi, e])
         if self.jit:
             step = native(step)
         N = self.t.size
         x0 = ca.MX.sym("x0", nx)
         P = ca.MX.sym("p", npar)
         U = ca.MX.sym("U", nu, N)
-        Xs = ca.horzcat(x0, step.mapaccum("run", N - 1)(x0, self._run_args(P, U))) \
-            if N > 1 else x0
+        if N > 1:
+            Xr, E = step.mapaccum("run", N - 1)(x0, self._run_args(P, U))
+            Xs = ca.horzcat(x0, Xr)
+        else:
+            Xs, E = x0, ca.MX(nx, 0)
         tt, yo = self._outputs_sx()
         out = ca.Function("outputs", [tt, x, p, u0], [yo])
         if self.jit:
             out = native(out)
         out = out.map(N)
         Y = out(ca.DM(self.t.reshape(1, -1)), Xs, ca.repmat(P, 1, N), U)
+        self._checked = ca.Function("trajectory_checked", [P, x0, U], [Y, Xs, E],
+                                    ["p", "x0", "U"], ["Y", "X", "newton"])
         return ca.Function("trajectory", [P, x0, U], [Y, Xs], ["p", "x0", "U"], ["Y", "X"])
+
+    def check_convergence(self, E) -> None:
+        """Raise if a sample's Newton iteration did not converge. ``E`` (nx, N-1): per
+        state and sample interval, the scaled correction one more iteration would make."""
+        E = np.asarray(E, dtype=float).reshape(self.cm.nx, -1)
+        bad = ~np.all(E <= 1.0, axis=0)                 # NaN counts as not converged
+        if not bad.any():
+            return
+        k = int(np.argmax(bad))
+        score = np.where(np.isfinite(E[:, k]), E[:, k], np.inf)
+        worst = [i for i in np.argsort(-score, kind="stable")[:3] if not score[i] <= 1.0]
+        names = [self.cm.state_names[i] for i in worst]
+        shown = ", ".join(f"{n} ({score[i]:.3g} x its tolerance)"
+                          for n, i in zip(names, worst))
+        raise SimulationError(
+            f"model '{self.cm.name}': the Radau IIA substeps did not converge between "
+            f"t = {self.t[k]:.9g} s and {self.t[k + 1]:.9g} s (sample {k}, "
+            f"{int(bad.sum())} sample interval(s) in all; Newton's next correction is "
+            f"largest for {shown}). Use more substeps (a smaller step ratio), or keep the "
+            "parameters in a plausible range (bounds): a stiff or wildly scaled model "
+            "needs shorter steps.", path=self.cm.name, variables=names)
 
     def _run_args(self, P, U):
         N = self.t.size
@@ -280,14 +333,16 @@ class Trajectory:
         h = ca.SX.sym("h_sample")
         tk = ca.SX.sym("tk")
         xi, Si = x, S
+        e = ca.DM.zeros(nx, 1)
         for j in range(m):
             args = ca.vertcat(xi, p, u0, u1, h / m, tk + j * h / m, j / m, 1 / m)
-            K = self._solve(ca.repmat(xi, len(_C), 1), args)
+            K, ej = self._substep(xi, args)
             Si = sub(K, Si, args)
             xi = K[-nx:]
+            e = ca.fmax(e, ej)
         xa = ca.vertcat(x, ca.vec(S))
         step = ca.Function("sample_step_sens", [xa, ca.vertcat(p, u0, u1, h, tk)],
-                           [ca.vertcat(xi, ca.vec(Si))])
+                           [ca.vertcat(xi, ca.vec(Si)), e])
         if self.jit:
             step = native(step)
         N = self.t.size
@@ -296,8 +351,11 @@ class Trajectory:
         P = ca.MX.sym("p", npar)
         U = ca.MX.sym("U", nu, N)
         xa0 = ca.vertcat(x0, ca.vec(S0))
-        XA = ca.horzcat(xa0, step.mapaccum("run_sens", N - 1)(xa0, self._run_args(P, U))) \
-            if N > 1 else xa0
+        if N > 1:
+            XR, E = step.mapaccum("run_sens", N - 1)(xa0, self._run_args(P, U))
+            XA = ca.horzcat(xa0, XR)
+        else:
+            XA, E = xa0, ca.MX(nx, 0)
         tt, yo = self._outputs_sx()
         dy = ca.mtimes(ca.jacobian(yo, x), S) + ca.mtimes(ca.jacobian(yo, p), Dm)
         out = ca.Function("outputs_sens", [tt, xa, p, u0], [yo, ca.vec(dy)])
@@ -305,12 +363,28 @@ class Trajectory:
             out = native(out)
         out = out.map(N)
         Y, dY = out(ca.DM(self.t.reshape(1, -1)), XA, ca.repmat(P, 1, N), U)
-        f = ca.Function("trajectory_sens", [P, x0, U, S0], [Y, dY],
-                        ["p", "x0", "U", "S0"], ["Y", "dY"])
+        f = _Checked(ca.Function("trajectory_sens", [P, x0, U, S0], [Y, dY, E],
+                                 ["p", "x0", "U", "S0"], ["Y", "dY", "newton"]), self)
         self._sens[key] = f
         return f
 
     def __call__(self, p, x0, U):
-        """Outputs ``(n_out, N)`` and states ``(nx, N)`` as NumPy arrays."""
-        Y, X = self.function(p, x0, U)
+        """Outputs ``(n_out, N)`` and states ``(nx, N)`` as NumPy arrays; raises
+        :class:`~mechatron.errors.SimulationError` if a substep did not converge."""
+        Y, X, E = self._checked(p, x0, U)
+        self.check_convergence(E)
         return Y.full(), X.full()
+
+
+class _Checked:
+    """A trajectory function whose last output is the Newton convergence measure: called
+    like the CasADi function, it checks that output and returns the others."""
+
+    def __init__(self, fn: ca.Function, traj: Trajectory):
+        self.fn = fn
+        self.traj = traj
+
+    def __call__(self, *args):
+        *outs, E = self.fn(*args)
+        self.traj.check_convergence(E)
+        return tuple(outs)

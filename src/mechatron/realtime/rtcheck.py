@@ -276,7 +276,7 @@ def rtcheck(model, *, rate: float, t_stop: float | None = None, params: dict | N
                 h = T / m
                 try:
                     run = mt.simulate(cm, t_stop, solver=solver, dt=h, params=params,
-                                      iterations=it or 1)
+                                      iterations=it or 1, newton="count")
                     idx = np.arange(0, len(run.t), m * stride)
                     F = np.vstack([run[o][idx] for o in outputs])
                     err = _max_error(F, R) if F.shape == R.shape else math.inf

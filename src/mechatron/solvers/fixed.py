@@ -23,9 +23,14 @@ from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
 
 CHUNK = 2000   # steps per native fixed-step loop
+#: Newton's iteration has converged when the correction one more iteration would make is
+#: at most NEWTON_ATOL + NEWTON_RTOL |x| + NEWTON_STEP |x1 - x0| for every unknown (the
+#: last term: a thousandth of the step's own change, well under its truncation error)
+NEWTON_ATOL, NEWTON_RTOL, NEWTON_STEP = 1e-10, 1e-6, 1e-3
+NEWTON_MODES = ("check", "count")
 
 __all__ = ["METHODS", "ExplicitMethod", "ImplicitMethod", "ExtrapolatedMethod", "make_step",
-           "integrate_fixed"]
+           "integrate_fixed", "NEWTON_MODES"]
 
 
 @dataclass(frozen=True)
@@ -97,9 +102,26 @@ def _newton_z(cm: CompiledModel, t, X, z, p, iterations: int):
     return z
 
 
-def _euler_extrapolation(f, t, x0, z, h: float, sequence, iterations: int):
+def _scaled(delta, x1, x0=None):
+    """``|delta|`` in units of the Newton tolerance (see :data:`NEWTON_ATOL`)."""
+    tol = NEWTON_ATOL + NEWTON_RTOL * ca.fabs(x1)
+    if x0 is not None:
+        tol = tol + NEWTON_STEP * ca.fabs(x1 - x0)
+    return ca.fabs(delta) / tol
+
+
+def _z_error(cm: CompiledModel, t, X, z, p):
+    """Scaled correction one more Newton iteration on the algebraic equations would make."""
+    zs = ca.SX.sym("zs", cm.nz)
+    gs = cm.f_alg(t, X, zs, p)
+    jz, gz = ca.substitute([ca.jacobian(gs, zs), gs], [zs], [z])
+    return _scaled(ca.solve(jz, gz), z)
+
+
+def _euler_extrapolation(f, t, x0, z, h: float, sequence, iterations: int, errors=None):
     """Backward Euler over ``h`` with ``n`` substeps for each ``n`` in ``sequence``,
-    extrapolated (Aitken-Neville, powers of ``h``); see :class:`ExtrapolatedMethod`."""
+    extrapolated (Aitken-Neville, powers of ``h``); see :class:`ExtrapolatedMethod`.
+    ``errors`` (a list) collects each substep's scaled Newton correction."""
     xs = ca.SX.sym("xs", x0.numel())
     rows = []
     for n in sequence:
@@ -115,6 +137,11 @@ def _euler_extrapolation(f, t, x0, z, h: float, sequence, iterations: int):
             for _ in range(max(1, iterations)):
                 jx, rx = ca.substitute([jac, resid], [xs], [xn])
                 xn = xn - ca.solve(jx, rx)
+            if errors is not None:
+                # the next correction with the last iteration's Jacobian (its
+                # factorization is shared once the function is built with cse)
+                rx = ca.substitute(resid, xs, xn)
+                errors.append(_scaled(ca.solve(jx, rx), xn, xk))
             xk = xn
         row = [xk]
         for j in range(1, len(rows) + 1):
@@ -124,14 +151,21 @@ def _euler_extrapolation(f, t, x0, z, h: float, sequence, iterations: int):
     return rows[-1][-1], z
 
 
-def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) -> ca.Function:
-    """The step function of ``method`` with step ``dt`` (cached on the model)."""
+def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3, *,
+              check: bool = False) -> ca.Function:
+    """The step function of ``method`` with step ``dt`` (cached on the model).
+
+    ``check=True`` adds a third output ``newton``: for every state and algebraic unknown,
+    the correction that one more Newton iteration would make, in units of its tolerance
+    (see :data:`NEWTON_ATOL`); above 1 the fixed iteration count has not converged. The
+    first two outputs are the same expressions as without it (code generation and the
+    real-time runner use the two-output function)."""
     if method not in METHODS:
         raise SimulationError(f"unknown fixed-step solver '{method}'. Choose one of "
                               f"{', '.join(METHODS)}.")
     if not dt or dt <= 0:
         raise SimulationError(f"solver '{method}' needs a step size dt > 0, got {dt!r}.")
-    key = ("step", method, float(dt), int(iterations))
+    key = ("step", method, float(dt), int(iterations)) + (("check",) if check else ())
     if key in cm._cache:
         return cm._cache[key]
     m = METHODS[method]
@@ -163,8 +197,14 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
         x1 = x0
         for bi, k in zip(m.b, ks):
             x1 = x1 + h * bi * k
+        e_x = ca.DM.zeros(nx, 1)
     elif isinstance(m, ExtrapolatedMethod):
-        x1, z = _euler_extrapolation(f, t, x0, zg, h, m.sequence, iterations)
+        errors = []
+        x1, z = _euler_extrapolation(f, t, x0, zg, h, m.sequence, iterations,
+                                     errors if check else None)
+        e_x = errors[0] if errors else ca.DM.zeros(nx, 1)
+        for e in errors[1:]:
+            e_x = ca.fmax(e_x, e)
     else:
         f0, z = f(t, x0, zg)
         x1 = x0 + h * f0
@@ -175,6 +215,9 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
         for _ in range(max(1, iterations)):
             jx, rx = ca.substitute([jac, resid], [xs], [x1])
             x1 = x1 - ca.solve(jx, rx)
+        if check:
+            rx = ca.substitute(resid, xs, x1)
+            e_x = _scaled(ca.solve(jx, rx), x1, x0)
     z1 = _newton_z(cm, t + h, ca.vertcat(x1, rest), z if nz else zg, p, iterations) \
         if nz else zg
     modes, counters, tlast = (_segment(rest, 0, nr), _segment(rest, nr, 2 * nr),
@@ -195,27 +238,44 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3) ->
     if not (nr and cm.f_events is not None):
         Xn = ca.vertcat(x1, modes, counters, tlast)
     y = cm.f_out(t + h, Xn, z1, p)
-    step = ca.Function(f"step_{method}", [Xa, u, p, t], [ca.vertcat(Xn, z1), y],
-                       ["x", "u", "p", "t"], ["x_next", "y"])
+    if check:
+        e_z = _z_error(cm, t + h, ca.vertcat(x1, rest), z1, p) if nz else ca.SX(0, 1)
+        step = ca.Function(f"step_{method}", [Xa, u, p, t],
+                           [ca.vertcat(Xn, z1), y, ca.vertcat(e_x, e_z)],
+                           ["x", "u", "p", "t"], ["x_next", "y", "newton"], {"cse": True})
+    else:
+        step = ca.Function(f"step_{method}", [Xa, u, p, t], [ca.vertcat(Xn, z1), y],
+                           ["x", "u", "p", "t"], ["x_next", "y"])
     cm._cache[key] = step
     return step
 
 
 def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, z0, p, *,
-                    method: str, iterations: int = 3, inputs=None):
-    """Run ``make_step`` from ``t0`` to ``t_stop``; return ``(t, Y, X_final)``.
+                    method: str, iterations: int = 3, inputs=None, newton: str = "check"):
+    """Run ``make_step`` from ``t0`` to ``t_stop``; return ``(t, Y, X_final, unconverged)``.
 
     ``inputs`` (:class:`mechatron.solvers.inputs.Inputs`, optional) gives the external
     inputs, sampled at the start of each step and held over it (zero-order hold): each
-    step's ``p`` column carries them into the native loop."""
+    step's ``p`` column carries them into the native loop.
+
+    ``newton``: every step's Newton iterations (implicit methods, algebraic unknowns) are
+    checked (``make_step(check=True)``). ``"check"`` raises a
+    :class:`~mechatron.errors.SimulationError` at the first step that did not converge,
+    naming its time and the unknowns furthest from convergence; ``"count"`` (a real-time
+    target, which takes the fixed iteration count whatever happens) runs on and returns
+    the number of such steps as ``unconverged``."""
+    if newton not in NEWTON_MODES:
+        raise SimulationError(f"model '{cm.name}': newton must be one of "
+                              f"{', '.join(NEWTON_MODES)}, got {newton!r}.", path=cm.name)
     n = int(round((t_stop - t0) / dt))
     if n < 1:
         raise SimulationError(f"t_stop - t0 = {t_stop - t0:g} s is shorter than one step "
                               f"dt = {dt:g} s.")
-    step = make_step(cm, method, dt, iterations)
+    step = make_step(cm, method, dt, iterations, check=True)
     times = t0 + dt * np.arange(n)
     xa = np.concatenate([X0, z0])
     ys = []
+    unconverged = 0
     # native loops of at most CHUNK steps: building a mapaccum costs time growing with its
     # length, so long runs reuse one chunk function (Python runs once per chunk, not step)
     for start in range(0, n, CHUNK):
@@ -226,7 +286,15 @@ def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, 
             run = cm._cache[key] = step.mapaccum("run", m)
         pm = (np.repeat(p.reshape(-1, 1), m, axis=1) if inputs is None
               else inputs.columns(p, times[start:start + m]))
-        xs, y = run(xa, ca.DM.zeros(0, m), pm, times[start:start + m].reshape(1, -1))
+        xs, y, err = run(xa, ca.DM.zeros(0, m), pm, times[start:start + m].reshape(1, -1))
+        err = np.array(err, dtype=float).reshape(-1, m)
+        bad = ~np.all(err <= 1.0, axis=0)          # NaN counts as not converged
+        if bad.any():
+            if newton == "check":
+                k = int(np.argmax(bad))
+                raise _not_converged(cm, method, dt, iterations, times[start + k] + dt,
+                                     err[:, k])
+            unconverged += int(bad.sum())
         xs = np.array(xs, dtype=float).reshape(-1, m)
         xa = xs[:, -1]
         ys.append(np.array(y, dtype=float).reshape(-1, m))
@@ -234,4 +302,19 @@ def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, 
     y0 = np.array(cm.f_out(t0, X0, z0, p0), dtype=float).reshape(-1, 1)
     Y = np.hstack([y0] + ys)
     t = np.concatenate([[t0], t0 + dt * np.arange(1, n + 1)])
-    return t, Y, xa[:cm.nX]
+    return t, Y, xa[:cm.nX], unconverged
+
+
+def _not_converged(cm: CompiledModel, method: str, dt: float, iterations: int, t: float,
+                   err: np.ndarray) -> SimulationError:
+    names = list(cm.state_names) + list(cm.alg_names)
+    score = np.where(np.isfinite(err), err, np.inf)
+    worst = [i for i in np.argsort(-score, kind="stable")[:3] if not score[i] <= 1.0]
+    shown = ", ".join(f"{names[i]} ({score[i]:.3g} x its tolerance)" for i in worst)
+    return SimulationError(
+        f"model '{cm.name}': {method}: Newton's iteration did not converge in "
+        f"{iterations} iteration(s) at t = {t:.9g} s (dt = {dt:g} s); the next correction "
+        f"is largest for {shown}. Take a smaller step dt or more iterations "
+        f"(iterations={max(iterations, 1) * 2}); for a real-time target, which keeps the "
+        "fixed count, pass newton='count' to count such steps instead "
+        "(stats.unconverged_steps).", path=cm.name, variables=[names[i] for i in worst])

@@ -115,7 +115,8 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
     hard, hard_names, soft = [], [], []
     if nz:
         hard.append(cm.f_alg(t0, X, zs, ca.DM(p)))
-        hard_names += [f"algebraic equation {k + 1}" for k in range(nz)]
+        hard_names += [f"algebraic equation {k + 1} (for {cm.alg_names[k]})"
+                       for k in range(nz)]
     if cm.f_init is not None:
         hard.append(cm.f_init(t0, X, zs, ca.DM(p)))
         hard_names += [f"initial equation '{text}'" for text in
@@ -150,19 +151,46 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
         sol = least_squares(lambda v: np.array(g_fun(v), dtype=float).ravel(), w0,
                             jac=lambda v: np.array(jac_fun(v), dtype=float), xtol=1e-14,
                             ftol=1e-14, gtol=1e-14)
-        wv = sol.x
+        wv, status = sol.x, sol.message
     else:
         solver = ca.nlpsol("init", "ipopt", {"x": w, "f": f, "g": g},
                            {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                             "ipopt.tol": 1e-12, "ipopt.constr_viol_tol": 1e-10})
         wv = np.array(solver(x0=w0, lbg=0, ubg=0)["x"], dtype=float).ravel()
-    viol = float(np.max(np.abs(np.array(g_fun(wv), dtype=float)))) if ng else 0.0
+        status = f"IPOPT: {solver.stats().get('return_status', 'unknown')}"
+    resid = np.abs(np.array(g_fun(wv), dtype=float)).ravel() if ng else np.zeros(0)
+    viol = float(resid.max()) if ng else 0.0
     if viol > 1e-7:
-        _conflicts(cm, g, w, wv, hard_names, viol)
+        suspects = _conflicts(g, w, wv, hard_names)
+        if suspects:
+            raise InitializationError(
+                f"model '{cm.name}': no initial point meets every high-priority target "
+                f"(violation {viol:.3g}). Conflicting targets: {', '.join(suspects)}. "
+                "Lower the priority of one of them, or make them consistent.",
+                variables=[s.split(" = ")[0] for s in suspects], path=cm.name)
+        _not_converged(cm, t0, resid, hard_names, status, nx)
     return wv[:nx], wv[nx:]
 
 
-def _conflicts(cm, g, w, wv, names, viol):
+def _not_converged(cm, t0, resid, names, status, nx):
+    """The constraints are independent (no conflict) but the solve did not meet them: its
+    Newton iterations did not converge (no real root near the start values, or none)."""
+    worst = [i for i in np.argsort(-resid, kind="stable")[:3] if resid[i] > 1e-7]
+    shown = ", ".join(f"{names[i]} (residual {resid[i]:.3g})" for i in worst)
+    unknowns = list(cm.alg_names) or list(cm.state_names)
+    raise InitializationError(
+        f"model '{cm.name}': the initial point did not converge at t0 = {t0:g} s "
+        f"({status}); largest residuals: {shown}. Give start values closer to a solution "
+        f"(start= of {', '.join(unknowns[:4])}{' ...' if len(unknowns) > 4 else ''}), "
+        "check that the equations have a real solution for these parameters, or lower "
+        "the priority of a target.", path=cm.name,
+        variables=[names[i].split(" (for ")[-1].rstrip(")").split(" = ")[0]
+                   for i in worst])
+
+
+def _conflicts(g, w, wv, names) -> list[str]:
+    """High-priority targets among the dependent rows of the constraint Jacobian (none:
+    the constraints are independent, so they do not conflict)."""
     jac = np.array(ca.Function("j", [w], [ca.jacobian(g, w)])(wv), dtype=float)
     u, s, _ = np.linalg.svd(jac)
     # left null space of J: rows that are linear combinations of others
@@ -172,13 +200,8 @@ def _conflicts(cm, g, w, wv, names, viol):
     for k in range(rank, jac.shape[0]):
         vec = u[:, k]
         involved.update(np.nonzero(np.abs(vec) > 1e-6)[0].tolist())
-    suspects = [names[i] for i in sorted(involved)
-                if "(high)" in names[i] or names[i].startswith("initial equation")]
-    raise InitializationError(
-        f"model '{cm.name}': no initial point meets every high-priority target "
-        f"(violation {viol:.3g}). Conflicting targets: {', '.join(suspects) or 'unknown'}."
-        " Lower the priority of one of them, or make them consistent.",
-        variables=[s.split(" = ")[0] for s in suspects], path=cm.name)
+    return [names[i] for i in sorted(involved)
+            if "(high)" in names[i] or names[i].startswith("initial equation")]
 
 
 def _check_loop(cm: CompiledModel, X: np.ndarray, where: str) -> None:

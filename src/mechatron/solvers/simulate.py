@@ -18,7 +18,8 @@ from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
 from mechatron.solvers.logging import evaluate_outputs
 from mechatron.solvers.native import integrate_native, native_library
-from mechatron.solvers.variable import PLUGINS, integrate_variable
+from mechatron.solvers.stiffness import probe
+from mechatron.solvers.variable import PLUGINS, consistent_algebraics, integrate_variable
 
 __all__ = ["simulate", "SOLVERS"]
 
@@ -29,7 +30,7 @@ DEFAULT_POINTS = 1001
 def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = None,
              params: dict | None = None, inputs=None, rtol: float = 1e-6,
              atol: float = 1e-8, t_out=None, t0: float = 0.0, iterations: int = 3,
-             max_step: float | None = None) -> SimResult:
+             max_step: float | None = None, newton: str = "check") -> SimResult:
     """Simulate a model and log every variable.
 
     Parameters
@@ -39,8 +40,9 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     t_stop : float
         End time in s.
     solver : str
-        ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs; for models with events rk45,
-        or Rosenbrock for DAEs), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``,
+        ``"auto"`` (CVODES BDF for ODEs, IDAS for DAEs; for models with events
+        Rosenbrock if the model is stiff at the start or a DAE, else rk45: see
+        :func:`choose_auto`; ``stats.solver_reason`` says why), ``"cvodes"``, ``"idas"``, ``"rosenbrock"``, ``"rk45"``,
         ``"rodas4"`` (the model, a Rosenbrock integrator and its event handling compiled
         to one C library: the fastest for ODE models up to a few hundred states, see
         :mod:`mechatron.solvers.native`), or a fixed-step method: ``"euler"``,
@@ -59,7 +61,14 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         Output times of a variable-step run (default: 1001 points); fixed-step runs log
         every step.
     iterations : int
-        Newton iterations per step of the implicit fixed-step methods.
+        Newton iterations per step of the implicit fixed-step methods (and of the
+        algebraic unknowns of any fixed-step method).
+    newton : {"check", "count"}
+        What a fixed-step run does when ``iterations`` Newton iterations leave a step
+        unconverged: ``"check"`` (default) raises a
+        :class:`~mechatron.errors.SimulationError` naming the time and the unknowns;
+        ``"count"`` keeps the fixed count, as a real-time target does, and reports the
+        number of such steps in ``stats.unconverged_steps``.
     max_step : float, optional
         Largest step of the variable-step solvers (for models with events, by default a
         fiftieth of the simulated time, or half the shortest time scale a component
@@ -97,15 +106,17 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     clock = _time.perf_counter()
     X0, z0, init_report = initialize(cm, p if ext is None else ext.columns(p, t0)[:, 0], t0)
     if solver in METHODS:
-        t, Y, Xf = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p, method=solver,
-                                   iterations=iterations, inputs=ext)
+        t, Y, Xf, unconverged = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p,
+                                                method=solver, iterations=iterations,
+                                                inputs=ext, newton=newton)
         n = len(t) - 1
         if t_out is not None:
             t_req = np.asarray(t_out, dtype=float)
             Y = np.vstack([np.interp(t_req, t, row) for row in Y])
             t = t_req
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
-                            rhs_evals=n * _stages(solver), jac_evals=0)
+                            rhs_evals=n * _stages(solver), jac_evals=0,
+                            solver_reason="asked for", unconverged_steps=unconverged)
     elif solver == "rodas4":
         grid = _grid(cm, t0, t_stop, t_out)
         Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
@@ -115,16 +126,20 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
             t, Y = t[1:], Y[:, 1:]
         stats = SolverStats(solver="rodas4", steps=st["n_steps"],
                             rejected_steps=st["n_reject"], rhs_evals=st["n_rhs"],
-                            jac_evals=st["n_jac"])
+                            jac_evals=st["n_jac"], solver_reason="asked for")
     else:
         grid = _grid(cm, t0, t_stop, t_out)
-        plugin = solver
+        h_max = _max_step(cm, p, grid, max_step)
+        plugin, reason = solver, "asked for"
+        if solver == "auto":
+            p_t0 = p if ext is None else ext.columns(p, t0)[:, 0]
+            plugin, reason = choose_auto(cm, t0, t_stop, X0, z0, p_t0, h_max)
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
-                                            atol=atol, max_step=_max_step(cm, p, grid,
-                                                                          max_step),
-                                            inputs=ext)
-        Y = evaluate_outputs(cm, grid, X, Z,
-                             p if ext is None else ext.logged_columns(p, grid))
+                                            atol=atol, max_step=h_max, inputs=ext)
+        p_log = p if ext is None else ext.logged_columns(p, grid)
+        if cm.nz and Z.size:
+            Z = consistent_algebraics(cm, grid, X, Z, p_log, used)
+        Y = evaluate_outputs(cm, grid, X, Z, p_log)
         t, Xf = grid, X[:, -1]
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
             t, Y = t[1:], Y[:, 1:]
@@ -132,7 +147,8 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                             steps=int(st.get("n_steps", st.get("nsteps", 0))),
                             rejected_steps=int(st.get("n_reject", st.get("netfails", 0))),
                             rhs_evals=int(st.get("n_rhs", st.get("nfevals", 0))),
-                            jac_evals=int(st.get("n_jac", st.get("n_call_jacF", 0))))
+                            jac_evals=int(st.get("n_jac", st.get("n_call_jacF", 0))),
+                            solver_reason=reason)
     _check_chattering(cm, Xf, stats.solver)
     if cm.report.get("terminal_relations"):     # when(terminal()) acts at the last point
         Xf, Y[:, -1] = terminal_event(cm, float(t[-1]), Xf, z0, p)
@@ -147,6 +163,24 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     res.initialization = init_report
     res.event_times = _event_times(cm, Xf)
     return res
+
+
+def choose_auto(cm: CompiledModel, t0: float, t_stop: float, X0: np.ndarray,
+                z0: np.ndarray, p: np.ndarray, max_step: float | None) -> tuple[str, str]:
+    """The variable-step solver of ``solver="auto"`` and why.
+
+    Without events, BDF (CVODES; IDAS for a DAE), whose variable order and step suit
+    stiff and non-stiff models alike. With events (located inside the integrator, which
+    CasADi's SUNDIALS interfaces do only at output times): for a DAE the Rosenbrock
+    method; for an ODE the stiffness probe of :mod:`mechatron.solvers.stiffness` decides
+    between the L-stable Rosenbrock method (stiff) and Dormand-Prince (``rk45``)."""
+    if not cm.nr:
+        return ("idas" if cm.nz else "cvodes"), "no events: BDF suits stiff and non-stiff"
+    if cm.nz:
+        return "rosenbrock", (f"events and {cm.nz} algebraic unknown(s): the Rosenbrock "
+                              "method integrates the DAE and locates the events")
+    verdict = probe(cm, t0, X0, z0, p, t_stop - t0, max_step)
+    return ("rosenbrock" if verdict.stiff else "rk45"), "events, " + verdict.reason()
 
 
 def _max_step(cm: CompiledModel, p: np.ndarray, grid: np.ndarray,

@@ -20,7 +20,10 @@ from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
 from mechatron.solvers.inputs import driven_parameters
 
-__all__ = ["integrate_variable"]
+__all__ = ["integrate_variable", "consistent_algebraics", "held_states"]
+
+#: Newton iterations that polish the algebraic unknowns at the output times
+Z_ITERATIONS = 3
 
 
 @contextlib.contextmanager
@@ -61,6 +64,48 @@ def choose_plugin(cm: CompiledModel, solver: str) -> str:
     return plugin
 
 
+def held_states(cm: CompiledModel) -> list[int]:
+    """Entries of ``X`` held constant between events: discrete states (``der = 0``), the
+    relations' modes, event counters and event times."""
+    cached = cm._cache.get("held")
+    if cached is None:
+        t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
+        z, p = ca.SX.sym("z", cm.nz), ca.SX.sym("p", cm.p0.size)
+        rhs = cm.f_ode(t, X, z, p)
+        cached = cm._cache["held"] = [k for k in range(cm.nX) if rhs[k].is_zero()]
+    return cached
+
+
+def _hide(X: ca.MX, held: list[int]) -> ca.MX:
+    """``X`` with its held entries cut from differentiation.
+
+    A Rosenbrock step solves ``(I/(h gamma) - J) U = F + ...`` by a QR factorization; the
+    columns of ``J`` for held states (a PWM's latched switch-off time, the relations'
+    modes) mix the rounding of the other rows into their stage values, so a held state
+    used to drift by a few ulps per step (a mode of 0.9999999999999994 then counted as an
+    event by the transition, a counter above 0 taken for a recent event). Its stage
+    values are zero exactly anyway (its row of ``F`` is zero and its row of ``J`` too), so
+    dropping those columns leaves the step unchanged and makes ``U = 0`` exact."""
+    n = X.numel()
+    rows = [k for k in range(n) if k not in set(held)]
+    keep = ca.DM(ca.Sparsity.triplet(n, 1, rows, [0] * len(rows)), 1.0)
+    cut = ca.DM(ca.Sparsity.triplet(n, 1, list(held), [0] * len(held)), 1.0)
+    return keep * X + ca.stop_diff(cut * X, 1)
+
+
+def _model(cm: CompiledModel) -> ca.Function:
+    """``(t, X, z, p) -> (ode, alg, zero)`` as one SX function (one call in an MX graph)."""
+    fn = cm._cache.get("dae_sx")
+    if fn is None:
+        t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
+        z, p = ca.SX.sym("z", cm.nz), ca.SX.sym("p", cm.p0.size)
+        outs = [cm.f_ode(t, X, z, p), cm.f_alg(t, X, z, p) if cm.nz else ca.SX(0, 1),
+                cm.f_zero(t, X, z, p) if cm.nr else ca.SX(0, 1)]
+        fn = cm._cache["dae_sx"] = ca.Function("model", [t, X, z, p],
+                                               [ca.densify(o) for o in outs])
+    return fn
+
+
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
                 atol: float, max_step: float | None, drive: tuple = ()) -> ca.Function:
     # drive: (p slot, table length) of each external input given as a table; the tables
@@ -70,21 +115,30 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     cached = cm._cache.get(key)
     if cached is not None:
         return cached
-    S = ca.MX if drive else ca.SX   # MX passes input tables as blocks, not elements
+    held = held_states(cm) if plugin == "rosenbrock" else []
+    # MX passes input tables as blocks, not elements, and can hide held states from AD
+    S = ca.MX if drive or held else ca.SX
     t = S.sym("t")
     # SUNDIALS needs at least one state: a model of algebraic equations only gets a
     # constant dummy state (dropped again by integrate_variable)
     pad = 1 if cm.nX == 0 else 0
     Xi = S.sym("X", cm.nX + pad)
     X = Xi[:cm.nX]
+    Xd = _hide(X, held) if held else X     # X as the step's Jacobian sees it
     z = S.sym("z", cm.nz)
     p = S.sym("p", cm.p0.size + 2 * sum(n for _, n in drive))
     pe = driven_parameters(cm.p0.size, t, p, drive) if drive else p
     u = S.sym("u", 0)
     empty = S(0, 1)
-    outs = [ca.vertcat(cm.f_ode(t, X, z, pe), S.zeros(pad)),
-            cm.f_alg(t, X, z, pe) if cm.nz else empty, empty,
-            cm.f_zero(t, X, z, pe) if cm.nr else empty]
+    if S is ca.MX:
+        ode, alg, zero = _model(cm)(t, Xd, z, pe)
+    else:
+        ode = cm.f_ode(t, X, z, pe)
+        alg = cm.f_alg(t, X, z, pe) if cm.nz else empty
+        zero = cm.f_zero(t, X, z, pe) if cm.nr else empty
+    outs = [ca.vertcat(ode, S.zeros(pad)), alg if cm.nz else empty, empty,
+            zero if cm.nr else empty]
+    outs = [ca.densify(o) for o in outs]
     dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
@@ -116,7 +170,7 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     external inputs."""
     plugin = choose_plugin(cm, solver)
     if cm.nr and plugin in ("cvodes", "idas"):
-        owners = sorted({owner for owner, _ in cm.relations})
+        owners = sorted({owner or cm.name for owner, _ in cm.relations})
         raise SimulationError(
             f"model '{cm.name}': solver '{solver}' cannot locate the events of "
             f"{', '.join(owners[:6])}{' ...' if len(owners) > 6 else ''}: CasADi's SUNDIALS "
@@ -158,6 +212,52 @@ def _nonfinite_cause(cm: CompiledModel, t0: float, X0, z0, p, drive) -> str:
         if cause:
             return cause
     return ""
+
+
+def consistent_algebraics(cm: CompiledModel, grid: np.ndarray, X: np.ndarray,
+                          Z: np.ndarray, p: np.ndarray, solver: str) -> np.ndarray:
+    """The algebraic unknowns at the output times, solved to convergence.
+
+    A one-step integrator interpolates ``z`` to an output time and corrects it by a
+    single Newton step (CasADi's Rosenbrock plug-in), IDAS interpolates; neither checks
+    that ``alg(t, x, z) = 0`` holds there. :data:`Z_ITERATIONS` Newton iterations from
+    those values (one mapped CasADi call, no Python per point) settle them, and the
+    correction one more iteration would make is checked against ``1e-10 + 1e-6 |z|``
+    (:data:`mechatron.solvers.fixed.NEWTON_ATOL`): a point where it is not met raises a
+    :class:`SimulationError` naming the time and the unknowns. ``p`` is one parameter
+    vector or one column per point."""
+    from mechatron.solvers.fixed import NEWTON_ATOL, NEWTON_RTOL
+    n = grid.size
+    key = ("z_polish", n)
+    fn = cm._cache.get(key)
+    if fn is None:
+        t, X_, z0 = ca.SX.sym("t"), ca.SX.sym("X", cm.nX), ca.SX.sym("z", cm.nz)
+        p_ = ca.SX.sym("p", cm.p0.size)
+        zs = ca.SX.sym("zs", cm.nz)
+        g = cm.f_alg(t, X_, zs, p_)
+        step = ca.Function("newton_z", [zs, t, X_, p_], [ca.solve(ca.jacobian(g, zs), g)])
+        z = z0
+        for _ in range(Z_ITERATIONS):
+            z = z - step(z, t, X_, p_)
+        err = ca.fabs(step(z, t, X_, p_)) / (NEWTON_ATOL + NEWTON_RTOL * ca.fabs(z))
+        fn = cm._cache[key] = ca.Function("polish_z", [t, X_, z0, p_],
+                                          [z, err]).map(n, "serial")
+    P = p if np.ndim(p) == 2 else np.repeat(np.asarray(p).reshape(-1, 1), n, axis=1)
+    zp, err = (np.array(v, dtype=float) for v in fn(grid.reshape(1, -1), X, Z, P))
+    bad = ~np.all(err <= 1.0, axis=0)
+    if bad.any():
+        k = int(np.argmax(bad))
+        score = np.where(np.isfinite(err[:, k]), err[:, k], np.inf)
+        worst = [i for i in np.argsort(-score, kind="stable")[:3] if not score[i] <= 1.0]
+        names = [cm.alg_names[i] for i in worst]
+        raise SimulationError(
+            f"model '{cm.name}': {solver}: the algebraic unknowns did not converge at "
+            f"t = {grid[k]:.9g} s ({', '.join(names)}; {int(bad.sum())} output time(s) "
+            f"in all) after {Z_ITERATIONS} Newton iterations from the integrator's values. "
+            "The algebraic loop may have lost its solution (a singular Jacobian, a root "
+            "that vanished): check the parameters, or try a tighter tolerance.",
+            path=cm.name, variables=names)
+    return zp.reshape(cm.nz, n)
 
 
 def _explain(cm: CompiledModel, text: str) -> str:

@@ -21,15 +21,10 @@ class EnergyMeter(mt.Component):
         return [mt.der(self.E) == self.P]
 
 
-ROSENBROCK_MODES = ("shared-code bug (reported by h3): with CasADi's 'rosenbrock' plugin "
-                    "(solver='auto' for models with events) the gear's power-flow mode is "
-                    "flipped by the transition but stays in the backward branch after some "
-                    "events, so P_loss < 0 for a while; rk45 and rk4 keep the right mode")
-
-
 @pytest.mark.parametrize("solver", [
     "rk45",
-    "auto"])   # fixed by h4: 'auto' uses rk45 for ODE models with events
+    "rosenbrock",   # held modes exact (solvers.variable.held_states)
+    "auto"])
 def test_input_energy_equals_dissipated_plus_stored(solver):
     J1, J2, J3, k, D, ratio, eta = 0.01, 0.02, 0.05, 50.0, 0.05, 2.5, 0.85
     m = mt.System("train")
