@@ -50,7 +50,7 @@ class Run:
         res = self.result
         return {"id": self.id, "label": self.label, "kind": self.kind, "model": self.model,
                 "variant": self.variant, "params": self.params, "events": self.events,
-                "n_vars": len(res), "n_t": int(res.t.size),
+                "n_vars": len(res.names), "n_t": int(res.t.size),
                 "t0": float(res.t[0]), "t1": float(res.t[-1]), "seconds": self.seconds}
 
 

@@ -348,7 +348,10 @@ async function resimulate(defaults = false) {
   document.querySelectorAll("#params input[data-path]").forEach(input => {
     input.classList.remove("bad");
     const text = input.value.trim();
-    if (!defaults && text && text !== input.dataset.default) params[input.dataset.path] = text;
+    // a plain number is in the SI unit shown; text with a unit ("340 uH") is converted
+    if (!defaults && text && text !== input.dataset.default) {
+      params[input.dataset.path] = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/.test(text) ? Number(text) : text;
+    }
   });
   const keep = $("#keep-run") && $("#keep-run").checked;
   const tstop = parseFloat($("#t-stop") ? $("#t-stop").value : "");
@@ -515,6 +518,7 @@ function writeAddress() {
   if (plot.view) { q.set("t0", plot.view[0]); q.set("t1", plot.view[1]); } else { q.delete("t0"); q.delete("t1"); }
   if (state.active) q.set("run", state.active);
   if (state.model) q.set("model", state.model.name);
+  q.set("separate", plot.separate ? "1" : "0");
   history.replaceState(null, "", `?${q}`);
 }
 
