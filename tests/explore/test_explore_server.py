@@ -278,3 +278,38 @@ def _add(ws, res, label, folder):
     path = folder / f"{label}.parquet"
     res.save(path)
     return ws.load(path, label=label)
+
+
+RC_FILE = '''
+import mechatron as mt
+
+class RC(mt.Component):
+    """RC low-pass as its equation."""
+    experiment = {"t_stop": 5e-3}
+    V = mt.Parameter("V", default=2.0, doc="Source voltage")
+    R = mt.Parameter("Ohm", default="1 kohm", doc="Resistance")
+    C = mt.Parameter("F", default="1 uF", doc="Capacitance")
+    v = mt.Variable("V", start=0.0, doc="Capacitor voltage")
+
+    def equations(self):
+        return [self.C * mt.der(self.v) == (self.V - self.v) / self.R]
+'''
+
+
+def test_a_users_model_file(tmp_path):
+    (tmp_path / "rc_model.py").write_text(RC_FILE)
+    spec = str(tmp_path / "rc_model.py")
+    srv = ExploreServer(Workspace(), port=0)
+    srv.start()
+    try:
+        status, run = call(srv, "/api/simulate", body={"model": spec, "params": {"R": "2 kohm"}})
+        assert status == 200, run
+        status, sig = call(srv, f"/api/runs/{run['id']}/signal?name=v&width=2000")
+        t, v = np.asarray(sig["t"]), np.asarray(sig["y"])
+        # v = V (1 - exp(-t / RC)), RC = 2 ms
+        assert np.allclose(v, 2.0 * (1.0 - np.exp(-t / 2e-3)), atol=1e-5)
+        status, models = call(srv, "/api/models")
+        assert models[0]["name"] == spec
+    finally:
+        srv.shutdown()
+        srv.server_close()

@@ -74,19 +74,43 @@ class Workspace:
         self._compiled: dict[tuple[str, str], tuple[object, object]] = {}
         self._compile_locks: dict[tuple[str, str], threading.Lock] = {}
         self._library: list[dict] | None = None
+        self._entries: dict[str, object] = {}    # added entries and users' model files
+
+    def add_entry(self, entry) -> None:
+        """Offer a :class:`~mechatron.models.entry.ModelEntry` that is not in the database
+        (a script's own model) under its name."""
+        with self._lock:
+            self._entries[entry.name] = entry
+
+    def _entry(self, name: str):
+        """The entry ``name``: one added here, a database name, or a user's model file
+        ``path/to/model.py[:Class]`` (a :class:`ModelError` naming close names if none)."""
+        with self._lock:
+            if name in self._entries:
+                return self._entries[name]
+        from mechatron.models.user import component_class, entry_from_class
+        cls = component_class(name)
+        if cls is None:
+            return mt.models.get(name)
+        entry = entry_from_class(cls, name=name, source=name)
+        with self._lock:
+            return self._entries.setdefault(name, entry)   # a file is read once
 
     # ------------------------------------------------------------------ database
     def models(self) -> list[dict]:
         """The database: name, description, variants, tags of each model."""
+        with self._lock:
+            extra = list(self._entries.values())
+        known = {e.name for e in extra}
         return [{"name": e.name, "description": " ".join(e.description.split()),
                  "variants": list(e.variants), "tags": list(e.tags)}
-                for e in mt.models.list()]
+                for e in extra + [e for e in mt.models.list() if e.name not in known]]
 
     def model(self, name: str) -> dict:
         """One entry: description, parameters with units and provenance, variants,
         outputs, experiment, expected values, and the parts of its default variant with
         their classes' documentation."""
-        entry = _entry(name)
+        entry = self._entry(name)
         exp = entry.experiment
         labels = list(dict.fromkeys(k for paths in entry.outputs.values() for k in paths))
         return {
@@ -108,7 +132,7 @@ class Workspace:
 
     def parts(self, name: str, variant: str | None = None) -> list[dict]:
         """The top-level parts of one variant: path, class, documentation."""
-        entry = _entry(name)
+        entry = self._entry(name)
         model = entry.build(variant or entry.default_variant)
         out = []
         for path, part in model.components.items():
@@ -121,7 +145,7 @@ class Workspace:
     def diagram(self, name: str, variant: str | None = None) -> str:
         """The domain-coloured schematic of one variant, as SVG text."""
         from mechatron.report.diagram import DOT_HINT, diagram_dot
-        entry = _entry(name)
+        entry = self._entry(name)
         variant = variant or entry.default_variant
         source = diagram_dot(entry.build(variant), f"{entry.name} ({variant})")
         dot = shutil.which("dot")
@@ -150,7 +174,7 @@ class Workspace:
     # ------------------------------------------------------------------ runs
     def compiled(self, name: str, variant: str | None = None):
         """``(entry, compiled model)`` of one variant, compiled on first use only."""
-        entry = _entry(name)
+        entry = self._entry(name)
         variant = variant or entry.default_variant
         if variant not in entry.variants:
             raise ModelError(f"model '{name}': no variant '{variant}'. Variants: "
@@ -307,6 +331,3 @@ class Workspace:
             del self._runs[next(iter(self._runs))]
 
 
-def _entry(name: str):
-    """The database entry ``name`` (a :class:`ModelError` naming close names if none)."""
-    return mt.models.get(name)
