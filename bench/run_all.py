@@ -24,6 +24,7 @@ import bench_codegen
 import bench_dc_motor
 import bench_dimensions
 import bench_estimation
+import bench_explore
 import bench_multibody
 import bench_pwm
 import bench_realtime
@@ -32,7 +33,7 @@ import bench_scaling
 BENCHMARKS = {"dc_motor": bench_dc_motor.run, "pwm": bench_pwm.run, "scaling": bench_scaling.run,
               "codegen": bench_codegen.run, "realtime": bench_realtime.run,
               "multibody": bench_multibody.run, "estimation": bench_estimation.run,
-              "dimensions": bench_dimensions.run}
+              "dimensions": bench_dimensions.run, "explore": bench_explore.run}
 
 
 def _summary(results: dict) -> dict:
@@ -106,6 +107,11 @@ def _summary(results: dict) -> dict:
                           "ns_per_step": {name: ([r["ns_per_step"] for r in rows]
                                                  if isinstance(rows, list) else None)
                                           for name, rows in cg["models"].items()}}
+    ex = results.get("explore")
+    if ex and "error" not in ex:
+        out["explore"] = {name: {"change_median_s": ex[name]["change_s"]["median_s"],
+                                 "first_s": ex[name]["first_s"]}
+                          for name in ex if name.startswith(("dc_motor", "rc_ladder"))}
     return out
 
 
