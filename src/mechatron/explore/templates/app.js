@@ -2,7 +2,7 @@
 "use strict";
 // Mechatron explorer: the page's logic. Talks to the JSON API of mechatron.explore.server;
 // the plot is MtPlot.Plot (plot.js). Everything a test or a link needs is reachable from
-// window.app and from the address: ?view=&model=&run=&plot=RUN:PATH;RUN:PATH&t0=&t1=&separate=1
+// window.app and from the address: ?view=&model=&run=&plot=RUN:PATH;RUN:PATH&t0=&t1=&separate=1&cursor=T
 // (&scenario=NAME runs /static/scenario_NAME.js, used by the browser tests).
 
 const {Plot, PALETTE, DASHES, fmt, valueAt} = window.MtPlot;
@@ -250,12 +250,19 @@ async function refetch(runs = null) {
 function updatePlot() {
   const many = new Set(state.plotted.map(p => p.run)).size > 1 || state.runs.length > 1;
   const traces = [];
+  // a CSV log carries no units: a variable without one takes the unit of the same
+  // variable in another run, so that a measurement shares the simulation's axis
+  const known = new Map();
+  for (const p of state.plotted) {
+    const d = state.data[key(p.run, p.name)];
+    if (d && d.unit && !known.has(p.name)) known.set(p.name, d.unit);
+  }
   for (const p of state.plotted) {
     const d = state.data[key(p.run, p.name)];
     const run = runById(p.run);
     if (!d || !run) continue;
     traces.push({key: key(p.run, p.name), name: p.name, run: p.run,
-                 label: many ? `${p.name} (${p.run})` : p.name, unit: d.unit,
+                 label: many ? `${p.name} (${p.run})` : p.name, unit: d.unit || known.get(p.name) || "",
                  color: colorOf(p.name), dash: DASHES[runIndex(p.run) % DASHES.length],
                  t: d.t, y: d.y, events: run.events, t0: run.t0, t1: run.t1,
                  decimated: d.decimated});
@@ -328,10 +335,19 @@ async function renderParams() {
     table.appendChild(h("tr", {}, h("td", {class: "path", text: p.path, title: p.path}), h("td", {}, input),
                         h("td", {class: "unit", text: p.unit === "1" ? "" : p.unit})));
   }
+  let find = null;
+  if (params.length > 12) {            // a large model: find parameters by path
+    find = h("input", {type: "search", placeholder: `filter ${params.length} parameters`});
+    find.addEventListener("input", () => {
+      const text = find.value.trim().toLowerCase();
+      for (const row of table.rows) row.hidden = text && !row.cells[0].textContent.toLowerCase().includes(text);
+    });
+  }
   const keep = h("input", {type: "checkbox", id: "keep-run"});
   const tstop = h("input", {type: "text", id: "t-stop", value: fmt(run.t1), title: "stop time in s"});
   box.replaceChildren(
     h("p", {class: "hint", text: `${run.model} (${run.variant}), compiled once: a change re-simulates without recompiling.`}),
+    ...(find ? [find] : []),
     table,
     h("table", {}, h("tr", {}, h("td", {text: "stop time"}), h("td", {}, tstop), h("td", {class: "unit", text: "s"}))),
     h("label", {}, keep, " keep this run and add the new one (to overlay)"),
@@ -543,6 +559,8 @@ async function readAddress(startup) {
   showView(q.get("view") || "results");
   await refetch();
   renderTree();
+  const cursor = parseFloat(q.get("cursor"));
+  if (isFinite(cursor)) plot.showCursor(cursor);
 }
 
 // ------------------------------------------------------------------ wiring
