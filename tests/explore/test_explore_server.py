@@ -146,6 +146,21 @@ def test_simulate_then_change_parameters_without_recompiling(server, monkeypatch
     assert sig3["y"][-1] == pytest.approx(w_final(r=14.2), rel=1e-5)
 
 
+def test_concurrent_changes_each_get_their_own_answer(server):
+    from concurrent.futures import ThreadPoolExecutor
+
+    def one(v):
+        status, run = call(server, "/api/simulate",
+                           body={"model": "dc_motor", "params": {"source.V": v}})
+        status, sig = call(server, f"/api/runs/{run['id']}/signal?name=inertia.w&width=50")
+        return sig["y"][-1]
+
+    volts = [6.0, 12.0, 18.0, 24.0]
+    with ThreadPoolExecutor(4) as pool:
+        finals = list(pool.map(one, volts))
+    assert finals == pytest.approx([w_final(v) for v in volts], rel=1e-5)
+
+
 def test_wrong_unit_and_unknown_parameter(server):
     message = error(server, "/api/simulate",
                     body={"model": "dc_motor", "params": {"inductor.L": "3 V"}})

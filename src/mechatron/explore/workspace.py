@@ -28,8 +28,9 @@ __all__ = ["Workspace", "Run", "event_times", "MAX_WIDTH"]
 
 #: Widest plot the signal endpoint serves, in pixels (a 4K screen).
 MAX_WIDTH = 4096
-#: Most runs kept; the oldest unpinned run goes first.
+#: Most runs kept, and most bytes of logged values; beyond either the oldest run goes.
 MAX_RUNS = 50
+MAX_BYTES = 2 * 1024 ** 3
 
 
 @dataclass
@@ -180,12 +181,16 @@ class Workspace:
             raise ModelError(f"model '{name}': no variant '{variant}'. Variants: "
                              f"{', '.join(entry.variants)}.", path=name)
         key = (entry.name, variant)
-        with self._lock:
-            lock = self._compile_locks.setdefault(key, threading.Lock())
-        with lock:
+        with self._model_lock(key):
             if key not in self._compiled:
                 self._compiled[key] = (entry, mt.compile_model(entry.build(variant)))
         return self._compiled[key]
+
+    def _model_lock(self, key: tuple[str, str]) -> threading.Lock:
+        """The lock of one compiled model: it is compiled once, and simulated by one
+        request at a time (its functions and caches are shared)."""
+        with self._lock:
+            return self._compile_locks.setdefault(key, threading.Lock())
 
     def parameters(self, name: str, variant: str | None = None) -> list[dict]:
         """The compiled model's parameters, which a live change may set: instance path,
@@ -211,10 +216,11 @@ class Workspace:
         if not np.isfinite(stop) or stop <= 0:
             raise ParameterError(f"model '{name}': the stop time must be a positive number "
                                  f"of seconds, got {t_stop!r}.", path=name)
-        start = time.perf_counter()
-        res = mt.simulate(cm, stop, solver=exp.solver, dt=exp.dt, rtol=exp.rtol,
-                          atol=exp.atol, params=changed)
-        seconds = time.perf_counter() - start
+        with self._model_lock((entry.name, variant)):
+            start = time.perf_counter()
+            res = mt.simulate(cm, stop, solver=exp.solver, dt=exp.dt, rtol=exp.rtol,
+                              atol=exp.atol, params=changed)
+            seconds = time.perf_counter() - start
         if label is None:
             label = f"{entry.name} ({variant})" + "".join(
                 f", {k}={v:g}" for k, v in changed.items())
@@ -327,7 +333,9 @@ class Workspace:
             return path.read_bytes()
 
     def _trim(self) -> None:
-        while len(self._runs) > MAX_RUNS:
+        def size() -> int:
+            return sum(r.result.values.nbytes for r in self._runs.values())
+        while len(self._runs) > MAX_RUNS or (len(self._runs) > 1 and size() > MAX_BYTES):
             del self._runs[next(iter(self._runs))]
 
 
