@@ -1,7 +1,8 @@
 """``mechatron explore``: the explorer, a local web app (see :mod:`mechatron.explore`).
 
-``mechatron explore [MODEL | results.parquet | results.csv] [--port N] [--no-browser]``
-opens a model (simulated with its default experiment) or a simlog, serves the page on
+``mechatron explore [MODEL | results.parquet | results.csv | estimate.json] [--port N]
+[--no-browser]`` opens a model (simulated with its default experiment), a simlog or the
+result of an estimation, sensitivity study or optimization, serves the page on
 127.0.0.1 and opens it in the browser; Ctrl-C stops it.
 """
 
@@ -23,8 +24,10 @@ def add_commands(sub) -> None:
                                    "parameter changes. It listens on 127.0.0.1 only and "
                                    "fetches nothing from the internet.")
     p.add_argument("target", nargs="?", metavar="MODEL|FILE",
-                   help="a database model to simulate and open (see `mechatron models`), "
-                        "or a simlog to open (.csv or .parquet)")
+                   help="a model to simulate and open (a database name, see `mechatron "
+                        "models`, or path/to/model.py[:Class]), a simlog to open (.csv or "
+                        ".parquet), or the .json result of `mechatron estimate`, "
+                        "`sensitivity` or `optimize`")
     p.add_argument("--port", type=int, default=0, metavar="N",
                    help="port to listen on (default: a free one)")
     p.add_argument("--no-browser", action="store_true",
@@ -46,7 +49,11 @@ def cmd_explore(args: argparse.Namespace) -> int:
     startup: dict = {}
     target = args.target
     if target:
-        if Path(target).suffix.lower() in SUFFIXES:
+        if Path(target).suffix.lower() == ".json":
+            study = workspace.load_study(Path(target))
+            startup = {"view": "studies", "study": study["id"]}
+            emit(f"opened {target}: {study['kind']} result")
+        elif Path(target).suffix.lower() in SUFFIXES:
             run = workspace.load(Path(target))
             startup = {"view": "results", "run": run.id}
             emit(f"opened {target}: {run.summary()['n_vars']} variables, "

@@ -19,7 +19,10 @@ input, 404 for an unknown address, 500 for a bug; the server keeps serving):
 ``/api/models/NAME/parameters?variant=V``      the compiled model's parameters
 ``/api/library``                               the component library by section
 ``POST /api/simulate``                         ``{model, variant, params, t_stop, replace}``
-``POST /api/open``                             ``{path}``: load a .csv/.parquet simlog
+``POST /api/open``                             ``{path}``: a .csv/.parquet simlog, or the
+                                               .json of estimate/sensitivity/optimize
+``/api/studies``                               the studies opened
+``/api/studies/ID/image/NAME``                 one of a study's plots (PNG)
 ``POST /api/upload?filename=F``                the body is a simlog file
 ``/api/runs``                                  every run
 ``/api/runs/ID/variables``                     names, units, descriptions (no values)
@@ -235,6 +238,10 @@ class _Handler(BaseHTTPRequestHandler):
                 return self._json(ws.runs())
             if route == ["scenario"]:
                 return self._json(self.server.scenario_report or {})
+            if route == ["studies"]:
+                return self._json(ws.studies())
+            if len(route) == 4 and route[0] == "studies" and route[2] == "image":
+                return self._send(200, ws.study_image(route[1], route[3]), "image/png")
             if len(route) == 2 and route[0] == "models":
                 return self._json(ws.model(route[1]))
             if len(route) == 3 and route[0] == "models":
@@ -289,7 +296,10 @@ class _Handler(BaseHTTPRequestHandler):
                 path = self._json_body().get("path")
                 if not isinstance(path, str) or not path.strip():
                     raise ValueError("open: give the file as {\"path\": \"run.csv\"}.")
-                return self._json(ws.load(Path(path.strip()).expanduser()).summary())
+                path = Path(path.strip()).expanduser()
+                if path.suffix.lower() == ".json":
+                    return self._json({"study": ws.load_study(path)})
+                return self._json(ws.load(path).summary())
             if route == ["upload"]:
                 filename = _one(query, "filename", "")
                 return self._json(ws.load_bytes(self._body(), filename).summary())

@@ -76,6 +76,7 @@ class Workspace:
         self._compile_locks: dict[tuple[str, str], threading.Lock] = {}
         self._library: list[dict] | None = None
         self._entries: dict[str, object] = {}    # added entries and users' model files
+        self._studies: dict[str, object] = {}    # estimation, sensitivity, optimization
 
     def add_entry(self, entry) -> None:
         """Offer a :class:`~mechatron.models.entry.ModelEntry` that is not in the database
@@ -270,6 +271,35 @@ class Workspace:
             path.write_bytes(data)
             run = self.load(path, label=Path(filename).name)
         return run
+
+    # ------------------------------------------------------------------ studies
+    def load_study(self, path) -> dict:
+        """Open the JSON result of ``mechatron estimate|sensitivity|optimize --out DIR``."""
+        from mechatron.explore.studies import read_study
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: no such file.")
+        with self._lock:
+            study_id = f"s{next(self._ids)}"
+        study = read_study(path, study_id)
+        with self._lock:
+            self._studies[study_id] = study
+        return study.as_dict()
+
+    def studies(self) -> list[dict]:
+        with self._lock:
+            return [s.as_dict() for s in self._studies.values()]
+
+    def study_image(self, study_id: str, name: str) -> bytes:
+        """One plot of a study (a PNG file listed by the study)."""
+        with self._lock:
+            study = self._studies.get(study_id)
+        if study is None:
+            raise KeyError(f"no study '{study_id}'. Open its .json first.")
+        if name not in study.images:
+            raise KeyError(f"study '{study_id}' has no plot '{name}'; plots: "
+                           f"{', '.join(study.images) or 'none'}.")
+        return (study.folder / name).read_bytes()
 
     def runs(self) -> list[dict]:
         with self._lock:

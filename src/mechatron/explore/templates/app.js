@@ -68,14 +68,16 @@ async function guarded(action) {
 
 // ------------------------------------------------------------------ views
 function showView(view) {
-  for (const v of ["results", "models", "library"]) $(`#view-${v}`).hidden = v !== view;
+  for (const v of VIEWS) $(`#view-${v}`).hidden = v !== view;
   document.querySelectorAll("nav .tab").forEach(b => b.classList.toggle("active", b.dataset.view === view));
   if (view === "models" && !$("#models").children.length) guarded(loadModels);
   if (view === "library" && !$("#sections").children.length) guarded(loadLibrary);
+  if (view === "studies") guarded(refreshStudies);
   if (view === "results") plot.render();
 }
 
 // ------------------------------------------------------------------ runs
+const VIEWS = ["results", "models", "library", "studies"];
 const runById = id => state.runs.find(r => r.id === id);
 const runIndex = id => state.runs.findIndex(r => r.id === id);
 
@@ -129,8 +131,40 @@ async function addRun(summary, {activate = true} = {}) {
 }
 
 async function openPath(path) {
-  const run = await api("/api/open", {json: {path}});
-  return addRun(run);
+  const answer = await api("/api/open", {json: {path}});
+  if (answer.study) return showStudy(answer.study);
+  return addRun(answer);
+}
+
+// ------------------------------------------------------------------ studies
+async function refreshStudies() {
+  const studies = await api("/api/studies");
+  $("#studies").replaceChildren(...studies.map(st => h("li", {"data-study": st.id, onclick: () => showStudy(st)},
+                                                   h("b", {text: `${st.id}: ${st.kind}`}), " ", st.label)));
+  return studies;
+}
+
+async function showStudy(study) {
+  await refreshStudies();
+  showView("studies");
+  document.querySelectorAll("#studies li").forEach(li => li.classList.toggle("active", li.dataset.study === study.id));
+  const box = $("#study");
+  box.replaceChildren(h("h2", {text: `${study.kind}: ${study.label}`}),
+    ...study.summary.map(line => h("p", {text: line})),
+    ...study.warnings.map(line => h("p", {class: "warning", text: line})));
+  for (const t of study.tables) {
+    box.append(h("h2", {text: t.title}),
+      h("table", {class: "data"}, h("tr", {}, ...t.headers.map(x => h("th", {text: x}))),
+        ...t.rows.map(r => h("tr", {}, ...r.map((c, i) => h("td", {class: i ? "num" : "", text: c}))))));
+  }
+  if (study.images.length) {
+    box.append(h("h2", {text: "Plots"}), h("div", {class: "study-images"},
+      ...study.images.map(name => h("figure", {}, h("img", {src: `/api/studies/${study.id}/image/${encodeURIComponent(name)}`, alt: name}),
+                                        h("figcaption", {text: name})))));
+  }
+  state.study = study.id;
+  writeAddress();
+  return study;
 }
 
 async function upload(file) {
@@ -528,12 +562,13 @@ function exportSVG() {
 // ------------------------------------------------------------------ the address
 function writeAddress() {
   const q = new URLSearchParams(location.search);
-  const view = ["results", "models", "library"].find(v => !$(`#view-${v}`).hidden);
+  const view = VIEWS.find(v => !$(`#view-${v}`).hidden);
   q.set("view", view);
   if (state.plotted.length) q.set("plot", state.plotted.map(p => `${p.run}:${p.name}`).join(";")); else q.delete("plot");
   if (plot.view) { q.set("t0", plot.view[0]); q.set("t1", plot.view[1]); } else { q.delete("t0"); q.delete("t1"); }
   if (state.active) q.set("run", state.active);
   if (state.model) q.set("model", state.model.name);
+  if (state.study) q.set("study", state.study);
   q.set("separate", plot.separate ? "1" : "0");
   history.replaceState(null, "", `?${q}`);
 }
@@ -545,6 +580,11 @@ async function readAddress(startup) {
   $("#separate").checked = separate; plot.separate = separate;
   if (run && runById(run)) await setActive(run);
   else if (state.runs.length) await setActive(state.runs[state.runs.length - 1].id);
+  const studyId = q.get("study") || startup.study;
+  if (studyId) {
+    const study = (await api("/api/studies")).find(st => st.id === studyId);
+    if (study) await showStudy(study);
+  }
   const model = q.get("model") || startup.model;
   if (model) await loadModel(model);
   let wanted = (q.get("plot") || "").split(";").filter(Boolean).map(s => {
@@ -556,7 +596,7 @@ async function readAddress(startup) {
   state.plotted = wanted.filter(p => runById(p.run));
   const t0 = parseFloat(q.get("t0")), t1 = parseFloat(q.get("t1"));
   if (isFinite(t0) && isFinite(t1)) plot.view = [t0, t1];
-  showView(q.get("view") || "results");
+  showView(q.get("view") || startup.view || "results");
   await refetch();
   renderTree();
   const cursor = parseFloat(q.get("cursor"));
@@ -583,12 +623,14 @@ $("#export-csv").addEventListener("click", () => guarded(() => exportData("csv")
 $("#export-parquet").addEventListener("click", () => guarded(() => exportData("parquet")));
 $("#export-png").addEventListener("click", () => guarded(() => exportPNG()));
 $("#export-svg").addEventListener("click", () => guarded(() => exportSVG()));
+$("#study-open").addEventListener("click", () => guarded(() => openPath($("#study-path").value.trim())));
+$("#study-path").addEventListener("keydown", ev => { if (ev.key === "Enter") guarded(() => openPath(ev.target.value.trim())); });
 $("#open-button").addEventListener("click", () => guarded(() => openPath($("#open-path").value.trim())));
 $("#open-path").addEventListener("keydown", ev => { if (ev.key === "Enter") guarded(() => openPath(ev.target.value.trim())); });
 $("#upload").addEventListener("change", ev => { const f = ev.target.files[0]; if (f) guarded(() => upload(f)); ev.target.value = ""; });
 
 window.app = {state, plot, api, guarded, showView, setActive, togglePlot, refetch, overlayRuns, resimulate,
-              loadModel, simulateModel, loadLibrary, openPath, upload, exportData, exportPNG, exportSVG, runById};
+              loadModel, simulateModel, loadLibrary, openPath, showStudy, upload, exportData, exportPNG, exportSVG, runById};
 
 window.app.ready = (async () => {
   const s = await guarded(() => api("/api/state"));
