@@ -12,6 +12,7 @@ folder named by ``MECHATRON_TEST_ARTIFACTS``). Skipped when Chromium is not inst
 from __future__ import annotations
 
 import base64
+import json
 import os
 import shutil
 import subprocess
@@ -73,9 +74,12 @@ def test_a_user_session_in_headless_chromium(tmp_path, artifacts):
         assert not failed, failed
         names = {c["what"] for c in report["checks"]}
         for step in ("two signals plotted", "half the voltage gives half the speed",
-                     "both runs drawn", "measurement overlaid", "wrong unit reported in the page",
+                     "both runs drawn", "difference to the first run at t_stop",
+                     "measurement overlaid", "wrong unit reported in the page",
                      "server still serves", "PNG export", "CSV export of a selection"):
             assert step in names
+        (artifacts / "explore_report.json").write_text(
+            json.dumps({k: v for k, v in report.items() if k != "png"}, indent=1))
         png = base64.b64decode(report["png"].split(",", 1)[1])
         assert png.startswith(PNG)
         (artifacts / "explore_export.png").write_bytes(png)

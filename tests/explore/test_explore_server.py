@@ -197,6 +197,26 @@ def test_signal_is_decimated_to_the_width_and_exact_in_a_window(server, tmp_path
     assert "no run 'r999'" in error(server, "/api/runs/r999/signal?name=x.y&width=9")
 
 
+def test_difference_of_two_runs(server, tmp_path):
+    ws = server.workspace
+    ta = np.linspace(0.0, 1.0, 101)
+    tb = np.linspace(0.0, 2.0, 301)                          # another grid, longer
+    a = _add(ws, SimResult(ta, [3.0 * ta], ["m.x"], ["m"]), "a", tmp_path)
+    b = _add(ws, SimResult(tb, [tb ** 2], ["m.x"], ["m"]), "b", tmp_path)
+    status, sig = call(server, f"/api/runs/{b.id}/signal?name=m.x&width=1000&minus={a.id}")
+    t, y = np.asarray(sig["t"]), np.array(sig["y"], dtype=float)
+    inside = t <= 1.0
+    # a is linear, so interpolating it onto b's times is exact
+    assert np.allclose(y[inside], t[inside] ** 2 - 3.0 * t[inside], atol=1e-12)
+    assert np.all(np.isnan(y[~inside]))                      # outside a's time span: gaps
+    assert sig["minus"] == a.id and sig["unit"] == "m"
+    c = _add(ws, SimResult(ta, [ta], ["m.x"], ["s"]), "c", tmp_path)
+    assert "unit s" in error(server, f"/api/runs/{c.id}/signal?name=m.x&width=9&minus={a.id}")
+    d = _add(ws, SimResult(ta, [ta], ["m.y"], ["m"]), "d", tmp_path)
+    assert "not logged in run" in error(server,
+                                        f"/api/runs/{a.id}/signal?name=m.x&width=9&minus={d.id}")
+
+
 def test_events_are_found_in_the_log(server, tmp_path):
     t = np.array([0.0, 0.1, 0.2, 0.2, 0.3])                 # an event at t = 0.2
     y = np.array([0.0, 0.0, 0.0, 1.0, 1.0])

@@ -27,6 +27,7 @@ input, 404 for an unknown address, 500 for a bug; the server keeps serving):
 ``/api/runs``                                  every run
 ``/api/runs/ID/variables``                     names, units, descriptions (no values)
 ``/api/runs/ID/signal?name=&width=&t0=&t1=``   one variable, decimated to ``width`` px
+``  ...&minus=RUN``                              its difference to the same one of RUN
 ``/api/runs/ID/export?name=..&format=&t0=&t1``  a selection as CSV or Parquet
 ``DELETE /api/runs/ID``                        forget a run
 ``POST /api/scenario``, ``GET /api/scenario``  a scripted page's report (browser tests)
@@ -268,7 +269,8 @@ class _Handler(BaseHTTPRequestHandler):
                         raise ValueError(f"signal: width must be a whole number of pixels, "
                                          f"got '{width}'.") from None
                     return self._json(ws.signal(run_id, name, width, _float(query, "t0"),
-                                                _float(query, "t1")))
+                                                _float(query, "t1"),
+                                                _one(query, "minus") or None))
                 if what == "export":
                     fmt = _one(query, "format", "csv")
                     data = ws.export(run_id, query.get("name", []), fmt,

@@ -327,16 +327,30 @@ class Workspace:
                 "descriptions": [docs[n] for n in res.names]}
 
     def signal(self, run_id: str, name: str, width: int, t0: float | None = None,
-               t1: float | None = None) -> dict:
-        """One variable in a time window, decimated to ``width`` pixel columns."""
+               t1: float | None = None, minus: str | None = None) -> dict:
+        """One variable in a time window, decimated to ``width`` pixel columns; with
+        ``minus``, its difference to the same variable of that run (interpolated
+        linearly onto this run's times; undefined outside that run's time span)."""
         if not 1 <= width <= MAX_WIDTH:
             raise ValueError(f"signal: width must be 1 to {MAX_WIDTH} pixels, got {width}.")
         run = self.run(run_id)
         res = run.result
         y = res[name]
+        unit = res.units[name]
+        if minus is not None:
+            ref = self.run(minus).result
+            if name not in ref:
+                raise KeyError(f"{name}: not logged in run '{minus}', so no difference to "
+                               "it. Compare variables both runs have.")
+            if unit and ref.units[name] and unit != ref.units[name]:
+                raise ValueError(f"{name}: unit {unit} in run '{run_id}' but "
+                                 f"{ref.units[name]} in run '{minus}'; no difference.")
+            unit = unit or ref.units[name]
+            inside = (res.t >= ref.t[0]) & (res.t <= ref.t[-1])
+            y = np.where(inside, y - np.interp(res.t, ref.t, ref[name]), np.nan)
         t, v, dropped = decimate(res.t, y, width, t0, t1)
         part = window(res.t, t0, t1)
-        return {"run": run_id, "name": name, "unit": res.units[name], "t": t, "y": v,
+        return {"run": run_id, "name": name, "unit": unit, "t": t, "y": v, "minus": minus,
                 "decimated": dropped, "n_window": int(part.stop - part.start)}
 
     def export(self, run_id: str, names: list[str], fmt: str, t0: float | None = None,

@@ -252,9 +252,19 @@ function colorOf(name) {
   return state.colors.get(name);
 }
 
+// The run a curve is compared with in difference mode: the first run plotting that
+// variable (none for that run itself).
+function reference(run, name) {
+  if (!state.differences) return null;
+  const first = state.plotted.find(p => p.name === name);
+  return first && first.run !== run ? first.run : null;
+}
+
 async function fetchSignal(run, name) {
   const view = plot.view;
   const q = new URLSearchParams({name, width: plot.plotWidth()});
+  const ref = reference(run, name);
+  if (ref) q.set("minus", ref);
   if (view) { q.set("t0", view[0]); q.set("t1", view[1]); }
   return api(`/api/runs/${run}/signal?${q}`);
 }
@@ -295,8 +305,10 @@ function updatePlot() {
     const d = state.data[key(p.run, p.name)];
     const run = runById(p.run);
     if (!d || !run) continue;
-    traces.push({key: key(p.run, p.name), name: p.name, run: p.run,
-                 label: many ? `${p.name} (${p.run})` : p.name, unit: d.unit || known.get(p.name) || "",
+    traces.push({key: key(p.run, p.name), name: p.name, run: p.run, minus: d.minus,
+                 label: d.minus ? `${p.name} (${p.run} − ${d.minus})` : many ? `${p.name} (${p.run})` : p.name,
+                 // differences get an axis of their own ("one axis per unit")
+                 unit: (d.minus ? "Δ " : "") + (d.unit || known.get(p.name) || ""),
                  color: colorOf(p.name), dash: DASHES[runIndex(p.run) % DASHES.length],
                  t: d.t, y: d.y, events: run.events, t0: run.t0, t1: run.t1,
                  decimated: d.decimated});
@@ -317,15 +329,16 @@ function renderReadout(t) {
   for (const tr of plot.traces) {
     const value = time === null ? null : valueAt(tr, time);
     if (!first.has(tr.name)) first.set(tr.name, value);
-    const ref = first.get(tr.name);
+    const ref = tr.minus ? 0 : first.get(tr.name);
     const swatch = h("td", {});
     swatch.style.borderLeft = `14px solid ${tr.color}`;
     const run = runById(tr.run);
     table.appendChild(h("tr", {"data-key": tr.key}, swatch, h("td", {text: tr.name}),
                         h("td", {text: run ? `${run.id}: ${run.label}` : tr.run}),
-                        h("td", {class: "num", text: (tr.decimated ? "≈ " : "") + fmt(value)}),
+                        h("td", {class: "num", text: tr.minus ? "" : (tr.decimated ? "≈ " : "") + fmt(value)}),
                         h("td", {text: tr.unit || "1"}),
-                        h("td", {class: "num", text: ref === value || ref === null || value === null ? "" : fmt(value - ref)})));
+                        h("td", {class: "num", text: tr.minus ? (tr.decimated ? "≈ " : "") + fmt(value) :
+                                                     ref === value || ref === null || value === null ? "" : fmt(value - ref)})));
   }
 }
 
@@ -570,12 +583,15 @@ function writeAddress() {
   if (state.model) q.set("model", state.model.name);
   if (state.study) q.set("study", state.study);
   q.set("separate", plot.separate ? "1" : "0");
+  if (state.differences) q.set("diff", "1"); else q.delete("diff");
   history.replaceState(null, "", `?${q}`);
 }
 
 async function readAddress(startup) {
   const q = new URLSearchParams(location.search);
   const run = q.get("run") || startup.run;
+  state.differences = q.get("diff") === "1";
+  $("#diff").checked = state.differences;
   const separate = q.get("separate") !== "0";          // one axis per unit unless asked
   $("#separate").checked = separate; plot.separate = separate;
   if (run && runById(run)) await setActive(run);
@@ -618,6 +634,7 @@ $("#lib-filter").addEventListener("input", () => filterList("#lib-filter", "#sec
 $("#separate").addEventListener("change", ev => plot.setSeparate(ev.target.checked));
 $("#zoom-reset").addEventListener("click", () => plot.setView(null));
 $("#overlay").addEventListener("click", () => guarded(overlayRuns));
+$("#diff").addEventListener("change", ev => { state.differences = ev.target.checked; guarded(async () => { await refetch(); writeAddress(); }); });
 $("#clear").addEventListener("click", () => { state.plotted = []; state.data = {}; updatePlot(); renderTree(); writeAddress(); });
 $("#export-csv").addEventListener("click", () => guarded(() => exportData("csv")));
 $("#export-parquet").addEventListener("click", () => guarded(() => exportData("parquet")));

@@ -46,7 +46,6 @@
     const w2 = last(data(run.id, "inertia.w"));
     check("half the voltage gives half the speed", Math.abs(w2 / w1 - 0.5) < 1e-4, w2 / w1);
     check("the plot was redrawn (new axis ticks)", document.querySelector("#plot svg").textContent !== before);
-    report.parameter_change_ms = app.state.lastSimulation ? app.state.lastSimulation.total * 1e3 : null;
     // 4. overlay a second run (keep the first, double the resistance)
     document.querySelector("#keep-run").checked = true;
     fire(document.querySelector('#params input[data-path="resistor.R"]'), "14.2 Ohm");
@@ -60,6 +59,14 @@
     app.plot.showCursor(0.25);
     const diffs = [...document.querySelectorAll("#readout tr")].map(tr => tr.cells[5] && tr.cells[5].textContent).filter(Boolean);
     check("readout shows the difference between runs", diffs.length >= 2, diffs.join(" "));
+    // differences: the second run drawn as its difference to the first, on its own axis
+    document.querySelector("#diff").click();
+    await waitFor(() => data(run2.id, "inertia.w") && data(run2.id, "inertia.w").minus === run.id, "the differences");
+    const d = data(run2.id, "inertia.w");
+    check("difference to the first run at t_stop", Math.abs(last(d) - (w3 - w2)) < 1e-6 * w2, `${last(d)} vs ${w3 - w2}`);
+    check("differences on their own axis", [...document.querySelectorAll("#plot text")].some(t => t.textContent === "[Δ rad/s]"));
+    document.querySelector("#diff").click();
+    await waitFor(() => !data(run2.id, "inertia.w").minus, "absolute values again");
     // 5. load a measurement (CSV) and overlay it
     if (q.get("csv")) {
       const measured = await app.openPath(q.get("csv"));
