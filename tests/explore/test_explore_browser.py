@@ -93,3 +93,31 @@ def test_a_user_session_in_headless_chromium(tmp_path, artifacts):
     finally:
         server.shutdown()
         server.server_close()
+
+
+def test_a_log_of_10000_variables_stays_responsive(tmp_path, artifacts):
+    # 10,000 variables x 20,001 points, without the memory: every row is one array
+    t = np.linspace(0.0, 1.0, 20_001)
+    row = np.sin(2 * np.pi * 40 * t)
+    names = [f"part{k // 10}.sub{k % 10}.x" for k in range(10_000)]
+    res = SimResult(t, np.broadcast_to(row, (len(names), t.size)), names, ["m"] * len(names))
+    workspace = Workspace()
+    run = workspace.add_result(res, "large")
+    server = ExploreServer(workspace, port=0, startup={"view": "results", "run": run.id})
+    server.start()
+    try:
+        out = chromium(tmp_path / "profile", f"{server.url}?scenario=large", "--dump-dom")
+        for _ in range(100):
+            if server.scenario_report:
+                break
+            time.sleep(0.1)
+        report = server.scenario_report
+        assert report, f"the scenario posted no report; Chromium said:\n{out.stderr[-3000:]}"
+        (artifacts / "explore_large_report.json").write_text(json.dumps(report, indent=1))
+        failed = [c for c in report["checks"] if not c["ok"]]
+        assert not failed, failed
+        assert len(report["checks"]) == 6
+    finally:
+        server.shutdown()
+        server.server_close()
+

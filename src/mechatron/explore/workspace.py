@@ -259,6 +259,18 @@ class Workspace:
             self._trim()
         return run
 
+    def add_result(self, res: SimResult, label: str = "") -> Run:
+        """Offer a :class:`SimResult` made in Python as a run."""
+        if not isinstance(res, SimResult):
+            raise TypeError(f"add_result: expected a SimResult, got {type(res).__name__}.")
+        with self._lock:
+            run_id = f"r{next(self._ids)}"
+            run = Run(run_id, label or res.model_name or run_id, res, "file", res.model_name,
+                      events=event_times(res))
+            self._runs[run_id] = run
+            self._trim()
+        return run
+
     def load_bytes(self, data: bytes, filename: str) -> Run:
         """Load a simlog sent by the page (a file chosen in the browser)."""
         suffix = Path(filename).suffix.lower()
