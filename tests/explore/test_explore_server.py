@@ -277,8 +277,8 @@ def test_files_that_are_not_simlogs(server, tmp_path):
     assert ".csv, .parquet" in error(server, "/api/open",
                                      body={"path": str(tmp_path / "readme.txt")})
     assert "folder" in error(server, "/api/open", body={"path": str(tmp_path)})
-    assert "missing.csv" in error(server, "/api/open",
-                                  body={"path": str(tmp_path / "missing.csv")})
+    assert "missing.csv: no such file" in error(server, "/api/open",
+                                                body={"path": str(tmp_path / "missing.csv")})
     assert ".csv or .parquet" in error(server, "/api/upload?filename=x.txt", raw=b"t\n0\n",
                                        method="POST")
 

@@ -240,12 +240,15 @@ class Workspace:
     def load(self, path, label: str | None = None) -> Run:
         """Load a simlog (``.csv`` or ``.parquet``, first column ``t``) as a run."""
         path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(f"{path}: no such file. A relative path starts in the "
+                                    f"folder the explorer was started from, {Path.cwd()}.")
         if path.is_dir():
             raise DataError(f"{path}: is a folder, not a simlog. Give a .csv or .parquet "
                             "file whose first column is t.", path=str(path))
         try:
             res = SimResult.load(path)
-        except DataError:
+        except (DataError, OSError):
             raise
         except Exception as exc:  # noqa: BLE001 - e.g. pyarrow on a file that is not Parquet
             raise DataError(f"{path}: not a simlog ({type(exc).__name__}: {exc}). Give a "
@@ -290,7 +293,8 @@ class Workspace:
         from mechatron.explore.studies import read_study
         path = Path(path)
         if not path.is_file():
-            raise FileNotFoundError(f"{path}: no such file.")
+            raise FileNotFoundError(f"{path}: no such file. A relative path starts in the "
+                                    f"folder the explorer was started from, {Path.cwd()}.")
         with self._lock:
             study_id = f"s{next(self._ids)}"
         study = read_study(path, study_id)
