@@ -39,10 +39,16 @@ def chromium(profile: Path, url: str, *args: str) -> subprocess.CompletedProcess
         [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
          "--disable-background-networking", "--disable-component-update", "--disable-sync",
          f"--user-data-dir={profile}", "--window-size=1400,860",
+         "--enable-logging=stderr", "--v=0",        # the page's console, for failures
          # virtual time stands still while requests are pending, so the budget is spent
          # only on the page's own waits
          "--virtual-time-budget=120000", *args, url],
         capture_output=True, text=True, timeout=300)
+
+
+def _console(run: subprocess.CompletedProcess) -> str:
+    lines = [line for line in run.stderr.splitlines() if "CONSOLE" in line]
+    return "\n".join(lines[-20:]) or run.stderr[-3000:]
 
 
 @pytest.fixture
@@ -69,13 +75,13 @@ def test_a_user_session_in_headless_chromium(tmp_path, artifacts):
                 break
             time.sleep(0.1)
         report = server.scenario_report
-        assert report, f"the scenario posted no report; Chromium said:\n{run.stderr[-3000:]}"
+        assert report, "the scenario posted no report; the page's console:\n" + _console(run)
         failed = [c for c in report["checks"] if not c["ok"]]
         assert not failed, failed
         names = {c["what"] for c in report["checks"]}
         for step in ("two signals plotted", "half the voltage gives half the speed",
                      "both runs drawn", "difference to the first run at t_stop",
-                     "measurement overlaid", "wrong unit reported in the page",
+                     "measurement overlaid", "dragging zooms to the dragged span", "wrong unit reported in the page",
                      "server still serves", "PNG export", "CSV export of a selection"):
             assert step in names
         (artifacts / "explore_report.json").write_text(
@@ -112,7 +118,7 @@ def test_a_log_of_10000_variables_stays_responsive(tmp_path, artifacts):
                 break
             time.sleep(0.1)
         report = server.scenario_report
-        assert report, f"the scenario posted no report; Chromium said:\n{out.stderr[-3000:]}"
+        assert report, "the scenario posted no report; the page's console:\n" + _console(out)
         (artifacts / "explore_large_report.json").write_text(json.dumps(report, indent=1))
         failed = [c for c in report["checks"] if not c["ok"]]
         assert not failed, failed

@@ -78,7 +78,24 @@
       const up = await app.upload(new File([text], "exported.csv"));
       check("uploaded CSV has the exported variable", app.state.vars[up.id].names.join() === "inertia.w");
     }
-    // 6. zoom: full resolution in the window
+    // 6. zoom: by dragging across the plot (a quarter to a half of its width), the wheel,
+    // a double-click; then to the first 10 ms, where every sample comes back
+    const figure = document.querySelector("#plot svg");
+    const box = figure.getBoundingClientRect();
+    const x0 = app.plot.x0, x1 = app.plot.x1;
+    const at = f => ({clientX: box.left + x0 + f * (x1 - x0), clientY: box.top + 120, bubbles: true, button: 0});
+    const [a0, b0] = app.plot.range();
+    figure.dispatchEvent(new MouseEvent("mousedown", at(0.25)));
+    figure.dispatchEvent(new MouseEvent("mousemove", at(0.5)));
+    figure.dispatchEvent(new MouseEvent("mouseup", at(0.5)));
+    const dragged = app.plot.view;
+    check("dragging zooms to the dragged span", dragged && Math.abs(dragged[0] - (a0 + 0.25 * (b0 - a0))) < 1e-3 * (b0 - a0) &&
+          Math.abs(dragged[1] - (a0 + 0.5 * (b0 - a0))) < 1e-3 * (b0 - a0), JSON.stringify(dragged));
+    document.querySelector("#plot svg").dispatchEvent(new WheelEvent("wheel", {...at(0.5), deltaY: -100, cancelable: true}));
+    const wheeled = app.plot.view;
+    check("the wheel zooms in around the cursor", wheeled && wheeled[1] - wheeled[0] < 0.81 * (dragged[1] - dragged[0]), JSON.stringify(wheeled));
+    document.querySelector("#plot svg").dispatchEvent(new MouseEvent("dblclick", {bubbles: true}));
+    check("double-click resets the zoom", app.plot.view === null);
     app.plot.setView([0, 0.01]);
     await waitFor(() => { const d = data(run.id, "inertia.w"); return d && d.t[d.t.length - 1] < 0.02; }, "the zoom");
     const z = data(run.id, "inertia.w");
