@@ -291,6 +291,12 @@ def test_unknown_addresses_and_foreign_hosts(server, monkeypatch):
     error(server, "/etc/passwd", status=404)
     assert "refused" in error(server, "/api/models", status=403,
                               headers={"Host": "evil.example:80"})
+    assert "refused" in error(server, "/api/simulate", status=403, body={"model": "dc_motor"},
+                              headers={"Origin": "http://evil.example"})
+    port = server.server_address[1]
+    assert "refused" in error(server, "/api/models", status=403,
+                              headers={"Origin": f"http://127.0.0.1:{port + 1}"})
+    assert call(server, "/api/models", headers={"Origin": f"http://127.0.0.1:{port}"})[0] == 200
 
     def broken():
         raise RuntimeError("boom")

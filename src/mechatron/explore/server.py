@@ -3,9 +3,10 @@
 
 Built on the standard library (:class:`http.server.ThreadingHTTPServer`): one request per
 thread, so a long simulation does not block the browsing of another run. The server binds
-to 127.0.0.1 and answers only requests addressed to that host (a page of another site
-cannot reach it through DNS rebinding); nothing is fetched from elsewhere, the page and its
-plotting code are files of this package (``templates/``).
+to 127.0.0.1 and answers only requests addressed to that host and sent by its own page
+(another site open in the browser can neither reach it through DNS rebinding nor post
+to it); nothing is fetched from elsewhere, the page and its plotting code are files of
+this package (``templates/``).
 
 API (``GET`` unless marked; errors are ``{"error": message}`` with status 400 for bad
 input, 404 for an unknown address, 500 for a bug; the server keeps serving):
@@ -190,13 +191,26 @@ class _Handler(BaseHTTPRequestHandler):
         return data
 
     def _host_ok(self) -> bool:
+        """The request is addressed to this machine and, when a browser says which page
+        sent it (``Origin``), comes from the explorer's own page: another site open in the
+        browser can neither read from the explorer nor make it simulate or open files."""
+        local = ("127.0.0.1", "localhost", "::1", self.server.server_address[0])
         host = (self.headers.get("Host") or "").rsplit(":", 1)[0].strip("[]").lower()
-        return host in ("127.0.0.1", "localhost", "::1", self.server.server_address[0])
+        if host not in local:
+            return False
+        origin = self.headers.get("Origin")
+        if origin is None:
+            return True
+        parts = urlsplit(origin)
+        return parts.scheme == "http" and (parts.hostname or "") in local and \
+            parts.port == self.server.server_address[1]
 
     def _dispatch(self):
         if not self._host_ok():
-            self._error(403, f"requests for host '{self.headers.get('Host')}' are refused: "
-                             "the explorer answers only on this machine (127.0.0.1).")
+            self._error(403, f"request for host '{self.headers.get('Host')}' from "
+                             f"'{self.headers.get('Origin') or 'no page'}' refused: the "
+                             "explorer answers its own page on this machine only "
+                             "(127.0.0.1).")
             return
         split = urlsplit(self.path)
         parts = [unquote(p) for p in split.path.split("/") if p]
