@@ -27,6 +27,7 @@ import bench_dc_motor
 import bench_dimensions
 import bench_estimation
 import bench_events
+import bench_explore
 import bench_import
 import bench_multibody
 import bench_pwm
@@ -41,7 +42,8 @@ BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
               "multibody": bench_multibody.run, "estimation": bench_estimation.run,
               "dimensions": bench_dimensions.run, "subsystems": bench_subsystems.run,
               "events": bench_events.run,
-              "stiff_contact": bench_stiff_contact.run}
+              "stiff_contact": bench_stiff_contact.run,
+              "explore": bench_explore.run}
 
 #: Goals of issue 17 for the RC ladder: compile seconds by N, and simulation at least
 #: twice as fast as the SciPy peer (ratio peer / Mechatron >= 2) at these N.
@@ -127,6 +129,11 @@ def _summary(results: dict) -> dict:
                           "ns_per_step": {name: ([r["ns_per_step"] for r in rows]
                                                  if isinstance(rows, list) else None)
                                           for name, rows in cg["models"].items()}}
+    ex = results.get("explore")
+    if ex and "error" not in ex:
+        out["explore"] = {name: {"change_median_s": ex[name]["change_s"]["median_s"],
+                                 "first_s": ex[name]["first_s"]}
+                          for name in ex if name.startswith(("dc_motor", "rc_ladder"))}
     return out
 
 
@@ -281,12 +288,21 @@ def _rows_stiff_contact(r: dict) -> list[dict]:
                  met=bool(r["meets_goals"]))]
 
 
+def _rows_explore(r: dict) -> list[dict]:
+    motor = r["dc_motor"]["change_s"]["median_s"]
+    ladder = next(v for k, v in r.items() if k.startswith("rc_ladder_"))
+    return [_row("explorer: parameter change to new plot data, dc_motor", "s", motor,
+                 goal="< 0.1 s", met=motor < 0.1),
+            _row("explorer: parameter change to new plot data, RC ladder", "s",
+                 ladder["change_s"]["median_s"])]
+
+
 TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_pwm,
               "scaling": _rows_scaling, "codegen": _rows_codegen,
               "realtime": _rows_realtime, "multibody": _rows_multibody,
               "estimation": _rows_estimation, "dimensions": _rows_dimensions,
               "subsystems": _rows_subsystems, "events": _rows_events,
-              "stiff_contact": _rows_stiff_contact}
+              "stiff_contact": _rows_stiff_contact, "explore": _rows_explore}
 
 
 def table(results: dict) -> list[dict]:

@@ -992,6 +992,7 @@ EXTENSIONS = (
     "mechatron.codegen.cli",
     "mechatron.realtime.cli",
     "mechatron.analysis.cli",
+    "mechatron.explore.cli",
 )
 
 
