@@ -352,7 +352,7 @@ def _rule(d, d_dot, ops, reach, d_ddot=None):
     """Mode from a distance; on the boundary the direction decides, at rest the op.
 
     "On the boundary" is a distance that the current motion crosses within
-    :data:`NEAR_TIME` and that is at most ``reach`` (see :func:`surface_reach`): after an
+    :data:`NEAR_TIME` and that is at most ``reach`` (see :func:`_surface_reach`): after an
     event located to the solver's event tolerance, a relation that crosses at the same
     instant (``u > 0`` and ``u < 0`` of one signal, a quantizer's next level) has a
     residual distance of either sign; its direction, not that residual, tells its mode. A
@@ -363,7 +363,7 @@ def _rule(d, d_dot, ops, reach, d_ddot=None):
                         for k in range(len(ops))])
 
 
-def surface_reach(d, d_dot, sel):
+def _surface_reach(d, d_dot, sel):
     """The largest distance :func:`_rule` reads as "on the boundary", per relation, during
     an event at which the relations have distances ``d`` and rates ``d_dot`` (with the
     modes before the event) and ``sel`` marks the relation located by the solver.
@@ -446,10 +446,10 @@ class Lowering:
         ``C = [x; modes; counters; modes at the start of the last two rounds; go]`` (``go``
         of the result: the round changed something) and the constants ``K = [t; z; p;
         event times; counters before the event; selected relation; distances at the event;
-        reach of the surfaces (:func:`surface_reach`); fixed-step flag]``. ``sweep``: the ordinary relations are re-read
-        one after the other, each seeing the modes already re-read (used when re-reading
-        them all at once has fallen into a cycle of period two, as two sliding modes that
-        each point into the other)."""
+        reach of the surfaces (:func:`_surface_reach`); fixed-step flag]``. ``sweep``: the
+        ordinary relations are re-read one after the other, each seeing the modes already
+        re-read (used when re-reading them all at once has fallen into a cycle of period
+        two, as two sliding modes that each point into the other)."""
         nx, nr = self.nx, self.nr
         C = ca.SX.sym("C", nx + 4 * nr + 1)
         K = ca.SX.sym("K", 1 + nz + npar + 5 * nr + 1)
@@ -599,7 +599,7 @@ class Lowering:
         X1 = ca.vertcat(x, flipped, counters, tlast)
         d0 = f_dist(t, X1, z, p)[0]
         dref, ddot_ref = f_dist(t, X, z, p)[:2]
-        reach = surface_reach(dref, ddot_ref, sel * ordinary)
+        reach = _surface_reach(dref, ddot_ref, sel * ordinary)
         K = ca.vertcat(t, z, p, tlast, counters, sel, d0, reach, fixed)
         it = self._iterate(f_dist, z.numel(), p.numel())
         Cf = it(ca.vertcat(x, flipped, counters, ca.DM.zeros(2 * nr), 1), K)
