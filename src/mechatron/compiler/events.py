@@ -348,29 +348,49 @@ def _apply(plan, order, targets, kinds, x_syms, shadow, x, fire, gidx, bind):
 NEAR_TIME = 1e-11   # s: a distance this close to zero (in time to cross) is on the boundary
 
 
-def _rule(d, d_dot, ops, d_ref, d_ddot=None):
+def _rule(d, d_dot, ops, reach, d_ddot=None):
     """Mode from a distance; on the boundary the direction decides, at rest the op.
 
-    "On the boundary" includes a distance that is tiny (at most 1e-9 of its size before
-    the event, ``d_ref``, or of 1) and that the current motion crosses within
-    :data:`NEAR_TIME`: after an event located to the solver's event tolerance, a relation
-    that crosses at the same instant (``u > 0`` and ``u < 0`` of one signal, a
-    quantizer's next level) has a residual distance of either sign; its direction, not
-    that residual, tells its mode. A distance that is large (a diode still off after its
-    switch opened: huge and moving fast) keeps its sign.
+    "On the boundary" is a distance that the current motion crosses within
+    :data:`NEAR_TIME` and that is at most ``reach`` (see :func:`_surface_reach`): after an
+    event located to the solver's event tolerance, a relation that crosses at the same
+    instant (``u > 0`` and ``u < 0`` of one signal, a quantizer's next level) has a
+    residual distance of either sign; its direction, not that residual, tells its mode. A
+    distance that is large (a diode still off after its switch opened: huge and moving
+    fast) keeps its sign.
     """
-    return ca.vertcat(*[_rule_one(d, d_dot, ops, d_ref, d_ddot, k)
+    return ca.vertcat(*[_rule_one(d, d_dot, ops, reach, d_ddot, k)
                         for k in range(len(ops))])
 
 
-def _rule_one(d, d_dot, ops, d_ref, d_ddot, k):
+def _surface_reach(d, d_dot, sel):
+    """The largest distance :func:`_rule` reads as "on the boundary", per relation, during
+    an event at which the relations have distances ``d`` and rates ``d_dot`` (with the
+    modes before the event) and ``sel`` marks the relation located by the solver.
+
+    A relation away from its surface: 1e-9 of its distance before the event, or of 1.
+    A relation located on its surface (the selected one, and one whose distance is then
+    tiny and crossed within :data:`NEAR_TIME` in a known direction, crossing at the same
+    instant): no bound, only the time to cross. Its remaining distance is rounding, and
+    the modes switched in this event scale it by their conductances (a diode in series
+    with one that turned off: the residual 1e-15 V of its on state, times 1/(R_on G_off),
+    is 1e-4 V in its off state), while the time it takes to cross does not change with
+    that scale. Bounding the distance instead re-reads that amplified residual as a
+    side of the surface, and the mode toggles between the two readings."""
+    located = ca.logic_or(sel, ca.logic_and(
+        ca.logic_and(ca.fabs(d) <= 1e-9, d_dot != 0),
+        ca.fabs(d) <= NEAR_TIME * ca.fabs(d_dot)))
+    return ca.if_else(located, ca.inf, 1e-9 * ca.fmax(1.0, ca.fabs(d)))
+
+
+def _rule_one(d, d_dot, ops, reach, d_ddot, k):
     """:func:`_rule` of relation ``k`` alone."""
     for op in (ops[k],):
         at_rest = 1.0 if op != "<" else -1.0
         if d_ddot is not None:     # at rest to first order: where it goes next
             at_rest = ca.if_else(d_ddot[k] > 0, 1, ca.if_else(d_ddot[k] < 0, -1, at_rest))
         near = ca.logic_and(ca.fabs(d[k]) <= NEAR_TIME * ca.fabs(d_dot[k]),
-                            ca.fabs(d[k]) <= 1e-9 * ca.fmax(1.0, ca.fabs(d_ref[k])))
+                            ca.fabs(d[k]) <= reach[k])
         return ca.if_else(ca.logic_and(near, d_dot[k] != 0), ca.sign(d_dot[k]),
                           ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, ca.if_else(
                               d_dot[k] > 0, 1, ca.if_else(d_dot[k] < 0, -1, at_rest)))))
@@ -425,11 +445,11 @@ class Lowering:
         """One round of the event iteration, ``(C, K) -> C'``, with the carried
         ``C = [x; modes; counters; modes at the start of the last two rounds; go]`` (``go``
         of the result: the round changed something) and the constants ``K = [t; z; p;
-        event times; counters before the event; selected relation; distances at the event
-        and before it; fixed-step flag]``. ``sweep``: the ordinary relations are re-read
-        one after the other, each seeing the modes already re-read (used when re-reading
-        them all at once has fallen into a cycle of period two, as two sliding modes that
-        each point into the other)."""
+        event times; counters before the event; selected relation; distances at the event;
+        reach of the surfaces (:func:`_surface_reach`); fixed-step flag]``. ``sweep``: the
+        ordinary relations are re-read one after the other, each seeing the modes already
+        re-read (used when re-reading them all at once has fallen into a cycle of period
+        two, as two sliding modes that each point into the other)."""
         nx, nr = self.nx, self.nr
         C = ca.SX.sym("C", nx + 4 * nr + 1)
         K = ca.SX.sym("K", 1 + nz + npar + 5 * nr + 1)
@@ -437,7 +457,7 @@ class Lowering:
         z = K[1:1 + nz] if nz else ca.SX(0, 1)
         p = K[1 + nz:1 + nz + npar] if npar else ca.SX(0, 1)
         o = 1 + nz + npar
-        te, cnt_pre, sel, d0, dref = (K[o + k * nr:o + (k + 1) * nr] for k in range(5))
+        te, cnt_pre, sel, d0, reach = (K[o + k * nr:o + (k + 1) * nr] for k in range(5))
         fixed = K[o + 5 * nr]
         x = C[:nx] if nx else ca.SX(0, 1)
         modes, cnt, p1 = C[nx:nx + nr], C[nx + nr:nx + 2 * nr], C[nx + 2 * nr:nx + 3 * nr]
@@ -447,7 +467,7 @@ class Lowering:
         def reread(k, d, ddot, d2):
             le = 1.0 if self.ops[k] in ("<=", "sign") else 0.0
             by_sign = ca.if_else(d[k] > 0, 1, ca.if_else(d[k] < 0, -1, 2 * le - 1))
-            rule = ca.if_else(fixed, by_sign, _rule_one(d, ddot, self.ops, dref, d2, k))
+            rule = ca.if_else(fixed, by_sign, _rule_one(d, ddot, self.ops, reach, d2, k))
             heading = ca.if_else(ddot[k] > 0, 1, ca.if_else(ddot[k] < 0, -1, ca.if_else(
                 d2[k] > 0, 1, ca.if_else(d2[k] < 0, -1, modes[k]))))
             # the relation that crossed keeps its flipped mode while its distance is
@@ -579,7 +599,8 @@ class Lowering:
         X1 = ca.vertcat(x, flipped, counters, tlast)
         d0 = f_dist(t, X1, z, p)[0]
         dref, ddot_ref = f_dist(t, X, z, p)[:2]
-        K = ca.vertcat(t, z, p, tlast, counters, sel, d0, dref, fixed)
+        reach = _surface_reach(dref, ddot_ref, sel * ordinary)
+        K = ca.vertcat(t, z, p, tlast, counters, sel, d0, reach, fixed)
         it = self._iterate(f_dist, z.numel(), p.numel())
         Cf = it(ca.vertcat(x, flipped, counters, ca.DM.zeros(2 * nr), 1), K)
         xf = Cf[:nx] if nx else ca.SX(0, 1)
