@@ -84,7 +84,10 @@ def _compile(model: Component, name: str | None) -> CompiledModel:
     hints = {n: v.hint for n, v in flat.variables.items() if v.hint}
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
-                ctx.time, start_guess, hints, preference=_state_preference(flat, alias))
+                ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
+                roles=_port_roles(flat, alias), classes=dict(flat.components),
+                physical={v.owner for v in flat.variables.values()
+                          if v.kind in ("across", "through")})
     lap("structure")
 
     # every logged variable as an expression of the unknowns
@@ -228,6 +231,43 @@ def _state_preference(flat, alias) -> dict[str, float]:
         if prio == "high":
             pref[rep] = pref.get(rep, 0.0) + 0.5
     return {n: v for n, v in pref.items() if v}
+
+
+def _port_roles(flat, alias) -> dict[str, tuple[str, str, str]]:
+    """For each alias representative that stands for port variables: whether they are
+    across or through variables and the quantity's name, singular and plural (from the
+    domain of the port: "current", "currents"). For messages about network topology."""
+    domain_of = {}
+    for members in getattr(flat, "connection_sets", None) or []:
+        for member in members:
+            path, domain = member[0], member[1]
+            domain_of[path] = domain
+    roles: dict[str, tuple[str, str, str]] = {}
+    for n, var in flat.variables.items():
+        if var.kind not in ("across", "through"):
+            continue
+        rep = alias.eliminated.get(n, (n, 1.0))[0]
+        if rep is None or rep in roles:
+            continue
+        domain = domain_of.get(n.rpartition(".")[0])
+        text = getattr(domain, var.kind, "") if domain is not None else ""
+        one = _quantity(text) or f"{var.kind} variable"
+        roles[rep] = (var.kind, one, _plural(one))
+    return roles
+
+
+def _quantity(text: str) -> str:
+    """"angular velocity w (rad/s)" -> "angular velocity"."""
+    words = text.split(" (")[0].split(",")[0].split()
+    return " ".join(words[:-1] if len(words) > 1 else words)
+
+
+def _plural(word: str) -> str:
+    if word.endswith("y") and not word.endswith(("ay", "ey", "oy")):
+        return word[:-1] + "ies"
+    if word.endswith(("x", "s")):
+        return word + "es"
+    return word + "s"
 
 
 def _input_default(flat, name: str) -> float:

@@ -1,0 +1,247 @@
+"""Constraints hidden in the linear network equations, found before index reduction.
+
+Kirchhoff's laws and the branch relations ``v = p.v - n.v`` are linear with coefficients
+of ±1. When a cut set of current sources and inductors (or a loop of voltage sources and
+capacitors, or their mechanical analogues: torque sources and springs, velocity sources
+and inertias) closes, a combination of these equations cancels every algebraic unknown
+and leaves a constraint among states and inputs, e.g. ``l.i == I`` for an inductor in
+series with a current source. The incidence does not show it: each equation still
+mentions unknowns, the matching succeeds, Pantelides differentiates nothing and the
+resulting algebraic loop is singular. Whether that happens depended on port orientation
+and declaration order, through alias elimination and the matching's choices.
+
+`reveal` reduces the constant-coefficient linear part of the equations exactly (see
+`mechatron.compiler.graph.elimination`) and hands index reduction an incidence in which
+such combinations appear as what they are. Equations that index reduction then
+differentiates take their reduced form (`Reduction.residual`); the others stay as
+written, which is equivalent (the reduced forms are the originals plus combinations of
+equations that stay) and keeps their explicit solution forms for the BLT pass.
+
+A combination that leaves no variable at all is a dependency among the equations: ideal
+sources that form a loop (or a cut set) by themselves. It is reported in physical terms
+by `reveal`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+
+from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
+from mechatron.errors import StructuralError
+
+__all__ = ["Reduction", "Combined", "reveal", "owner_of"]
+
+
+@dataclass
+class Reduction:
+    """Result of `reveal`.
+
+    Attributes
+    ----------
+    adj : list of list of int
+        Incidence for index reduction: the given one with every changed equation
+        replaced by the incidence of its reduced form.
+    changed : dict of int to tuple
+        ``changed[e] = (linear, combination)``: reduced linear part ``{column: coef}``
+        and the multipliers ``{equation: coef}`` of the given equations whose sum it is.
+    const : list of set of int
+        Columns in which each equation is linear with a numeric coefficient.
+    """
+
+    adj: list[list[int]]
+    changed: dict[int, tuple[dict, dict]] = field(default_factory=dict)
+    const: list[set[int]] = field(default_factory=list)
+
+    def residual(self, e: int, res: list[ca.SX], var_syms: list[ca.SX]) -> ca.SX:
+        """The reduced form of equation `e`: its linear part plus the other terms of the
+        equations it combines (each with its numeric-linear columns set to zero)."""
+        linear, comb = self.changed[e]
+        out = ca.SX(0)
+        for v, a in sorted(linear.items()):
+            out = out + float(a) * var_syms[v]
+        for k, m in sorted(comb.items()):
+            cols = sorted(self.const[k])
+            rest = ca.substitute(res[k], ca.vertcat(*[var_syms[v] for v in cols]),
+                                 ca.DM.zeros(len(cols))) if cols else res[k]
+            if not rest.is_zero():
+                out = out + float(m) * rest
+        return out
+
+
+class Combined:
+    """Origin of a reduced equation: the sum of the equations it combines."""
+
+    __slots__ = ("where", "parts")
+
+    def __init__(self, parts: list):
+        self.parts = parts
+        owners = []
+        for p in parts:
+            w = owner_of(p)
+            if w not in owners:
+                owners.append(w)
+        self.where = ", ".join(owners)
+
+    def __str__(self) -> str:
+        return f"{self.where}: combination of {len(self.parts)} equations " \
+               f"({'; '.join(str(p) for p in self.parts[:4])}" \
+               f"{' ...' if len(self.parts) > 4 else ''})"
+
+    __repr__ = __str__
+
+
+def owner_of(origin) -> str:
+    """Component (or connection set) an equation comes from."""
+    where = getattr(origin, "where", None)
+    if where:
+        return str(where)
+    text = str(origin)
+    if text.startswith("connect("):
+        return text[:text.index(")") + 1] if ")" in text else text
+    return text.split(":")[0]
+
+
+def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
+           var_names: list[str], var_to_diff: list[int], adj: list[list[int]],
+           roles: dict[str, tuple[str, str, str]] | None = None,
+           classes: dict[str, str] | None = None) -> Reduction:
+    """Reduce the numeric-linear part of the equations; raise on a dependency.
+
+    Parameters
+    ----------
+    res, orig, var_syms, var_names, var_to_diff, adj
+        Equations, their origins, the variables (unknowns and derivatives), the
+        derivative links and the incidence, as in `mechatron.compiler.structure.lower`.
+    roles : dict, optional
+        ``roles[name] = ("across" | "through", quantity, plural)`` for unknowns that
+        stand for port variables, e.g. ``("through", "current", "currents")``; for
+        messages.
+    classes : dict, optional
+        Class name of each component path, for messages ("sources v1 and v2").
+
+    Raises
+    ------
+    StructuralError
+        If a combination of the equations holds no variable: the equations are
+        dependent (a loop of ideal across sources, a cut set of ideal through sources).
+    """
+    n = len(var_syms)
+    if not res:
+        return Reduction([list(r) for r in adj])
+    jac = ca.jacobian(ca.vertcat(*res), ca.vertcat(*var_syms))
+    rows, cols = jac.sparsity().get_triplet()
+    const: list[set[int]] = [set() for _ in res]
+    linear: list[dict] = [{} for _ in res]
+    for r, c, z in zip(rows, cols, jac.nonzeros()):
+        if z.is_constant():
+            const[r].add(c)
+            value = float(z)
+            if value:
+                linear[r][c] = exact(value)
+    eliminable = [d == -1 for d in var_to_diff]
+    elim = exact_elimination(linear, eliminable)
+    out = Reduction([list(r) for r in adj], const=const)
+    nonlinear = {}
+
+    def other_terms(k: int) -> list[int]:
+        if k not in nonlinear:
+            nonlinear[k] = [v for v in adj[k] if v not in const[k]]
+        return nonlinear[k]
+
+    for e, row in elim.rows.items():
+        if not elim.changed(e):
+            continue
+        comb = elim.combination(e)
+        inc = dict.fromkeys(sorted(row))
+        for k in sorted(comb):
+            inc.update(dict.fromkeys(other_terms(k)))
+        out.changed[e] = (row, comb)
+        out.adj[e] = list(inc)
+    _check_dependencies(name, res, orig, var_names, eliminable, out, elim, linear,
+                        roles or {}, classes or {}, n)
+    return out
+
+
+def _check_dependencies(name, res, orig, var_names, eliminable, out: Reduction,
+                        elim: LinearElimination, linear, roles, classes, n) -> None:
+    """Raise for an equation whose reduced form holds no variable, or for state-only
+    constraints (``c.v == V``) that are dependent among themselves."""
+    empty = [e for e in out.changed if not out.adj[e]]
+    if empty:
+        e = empty[0]
+        _raise_dependency(name, orig, var_names, elim.combination(e), linear, roles,
+                          classes)
+    # constraints linear in states only, with nothing else: dependent among themselves?
+    pure = []
+    for e in range(len(res)):
+        if e in elim.pivots:
+            continue
+        row = out.changed[e][0] if e in out.changed else linear[e]
+        if out.adj[e] and len(row) == len(out.adj[e]) and \
+                not any(eliminable[v] for v in out.adj[e]):
+            pure.append(e)
+    if len(pure) < 2:
+        return
+    rows = {e: (out.changed[e][0] if e in out.changed else linear[e]) for e in pure}
+    dense = [rows.get(e, {}) for e in range(len(res))]
+    second = exact_elimination(dense, [True] * n, rows=pure)
+    for e, row in second.rows.items():
+        if row:
+            continue
+        total: dict = {}
+        for g, m in second.combination(e).items():
+            base = out.changed[g][1] if g in out.changed else {g: 1}
+            for k, b in base.items():
+                total[k] = total.get(k, 0) + m * b
+        total = {k: a for k, a in total.items() if a}
+        _raise_dependency(name, orig, var_names, total, linear, roles, classes)
+
+
+def _raise_dependency(name, orig, var_names, comb, linear, roles, classes) -> None:
+    eqs = sorted(comb)
+    owners: list[str] = []
+    for e in eqs:
+        w = owner_of(orig[e])
+        if not w.startswith("connect(") and w not in owners:
+            owners.append(w)
+    unknowns = sorted({v for e in eqs for v in linear[e]})
+    names = [var_names[v] for v in unknowns]
+    kinds = {roles[x][0] for x in names if x in roles}
+    what = {"through": "cut set", "across": "loop"}.get(kinds.pop()) if len(kinds) == 1 \
+        else None
+    if what is not None:
+        _, one, many = next(roles[x] for x in names if x in roles)
+    parts = [classes.get(w, "") for w in owners]
+    noun = "sources" if parts and all("Source" in c for c in parts) else "components"
+    who = _enumerate(owners) if owners else "equations"
+    if what is not None and len(owners) > 1:
+        head = f"{noun} {who} form a {what}: their {many} are not independent"
+    elif what is not None:
+        short = "a short circuit" if what == "loop" else "an open circuit"
+        head = (f"{noun[:-1]} {who} forms a {what} by itself ({short}?): its {one} is "
+                "not free")
+    else:
+        head = f"the equations of {who} are not independent"
+    if what == "cut set":
+        advice = (f"Remove one source, or give the {one} another path (a resistance, or "
+                  "a damper or spring in mechanics, in parallel with a source).")
+    elif what == "loop":
+        advice = ("Remove one source, or put a resistance (a damper or spring in "
+                  "mechanics) in series in the loop.")
+    else:
+        advice = "Remove a redundant equation or component."
+    texts = [str(orig[e]) for e in eqs]
+    raise StructuralError(
+        f"model '{name}': {head}. {len(eqs)} equations for {len(unknowns)} unknowns "
+        f"({', '.join(names[:8])}{' ...' if len(names) > 8 else ''}). Potential extra "
+        f"equation(s): {'; '.join(texts[:6])}{' ...' if len(texts) > 6 else ''}. "
+        f"{advice}",
+        equations=texts, variables=owners or names, path=name)
+
+
+def _enumerate(items: list[str]) -> str:
+    if len(items) == 1:
+        return items[0]
+    return ", ".join(items[:-1]) + " and " + items[-1]
