@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
+from mechatron.compiler.graph import maximum_matching
 from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
 from mechatron.errors import StructuralError
 
@@ -159,20 +160,24 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
             inc.update(dict.fromkeys(other_terms(k)))
         out.changed[e] = (row, comb)
         out.adj[e] = list(inc)
-    _check_dependencies(name, res, orig, var_names, eliminable, out, elim, linear,
-                        roles or {}, classes or {}, n)
+    _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out, elim,
+                        linear, roles or {}, classes or {}, n)
     return out
 
 
-def _check_dependencies(name, res, orig, var_names, eliminable, out: Reduction,
-                        elim: LinearElimination, linear, roles, classes, n) -> None:
+def _check_dependencies(name, res, orig, var_syms, var_names, eliminable,
+                        out: Reduction, elim: LinearElimination, linear, roles, classes,
+                        n) -> None:
     """Raise for an equation whose reduced form holds no variable, or for state-only
     constraints (``c.v == V``) that are dependent among themselves."""
-    empty = [e for e in out.changed if not out.adj[e]]
-    if empty:
-        e = empty[0]
-        _raise_dependency(name, orig, var_names, elim.combination(e), linear, roles,
-                          classes)
+    empty = [e for e in range(len(res)) if not out.adj[e]]
+    for e in empty:
+        comb = elim.combination(e) if e in out.changed else {e: 1}
+        value = out.residual(e, res, var_syms) if e in out.changed else res[e]
+        if value.is_zero():
+            # equations that add up to 0 == 0: one too few, some unknowns are free
+            _raise_floating(name, orig, var_names, eliminable, out, e, comb, roles)
+        _raise_dependency(name, orig, var_names, comb, linear, roles, classes)
     # constraints linear in states only, with nothing else: dependent among themselves?
     pure = []
     for e in range(len(res)):
@@ -199,6 +204,58 @@ def _check_dependencies(name, res, orig, var_names, eliminable, out: Reduction,
         _raise_dependency(name, orig, var_names, total, linear, roles, classes)
 
 
+def _raise_floating(name, orig, var_names, eliminable, out: Reduction, dependent: int,
+                    comb, roles) -> None:
+    """Equations that add up to ``0 == 0`` leave unknowns free: name the nodes whose
+    across variables are among them (a part of a network with no path to a
+    reference), or the free unknowns."""
+    rows = [r if e != dependent else [] for e, r in enumerate(out.adj)]
+    m = maximum_matching(len(var_names), rows, allowed=eliminable)
+    cols: dict[int, list[int]] = {}
+    for e, r in enumerate(rows):
+        for v in r:
+            cols.setdefault(v, []).append(e)
+    free = [v for v in range(len(var_names)) if eliminable[v] and m.var_to_eq[v] == -1]
+    seen = dict.fromkeys(free)
+    queue = list(free)
+    for v in queue:                      # alternating paths from the free unknowns
+        for e in cols.get(v, ()):
+            u = m.eq_to_var[e]
+            if u != -1 and u not in seen:
+                seen[u] = None
+                queue.append(u)
+    names = [var_names[v] for v in seen]
+    across = [x for x in names if roles.get(x, ("",))[0] == "across"]
+    eqs = [str(orig[e]) for e in sorted(comb)]
+    involved: set[str] = set()
+    for e in comb:
+        w = owner_of(orig[e])
+        if w.startswith("connect("):
+            for port in w[len("connect("):-1].split(","):
+                involved.update((port.strip(), port.strip().rpartition(".")[0]))
+        else:
+            involved.add(w)
+    inside = [x for x in across if x.rpartition(".")[0] in involved
+              or x.rpartition(".")[0].rpartition(".")[0] in involved]
+    across = inside or across
+    if across:
+        _, one, many = roles[across[0]]
+        nodes = sorted({x.rpartition(".")[0] or x for x in across})
+        raise StructuralError(
+            f"model '{name}': the {many} at {', '.join(nodes[:8])}"
+            f"{' ...' if len(nodes) > 8 else ''} are not determined: this part of the "
+            "network has no path to a reference (a floating node). Connect a reference "
+            f"to it, or a resistance from it to one (e.g. at {nodes[0]}).",
+            equations=eqs, variables=across, path=name)
+    raise StructuralError(
+        f"model '{name}': {len(eqs)} equations add up to 0 == 0, so one equation is "
+        f"missing for the unknowns {', '.join(names[:8])}"
+        f"{' ...' if len(names) > 8 else ''}. Redundant equations: "
+        f"{'; '.join(eqs[:6])}{' ...' if len(eqs) > 6 else ''}. Remove one, or add the "
+        "equation that determines these unknowns.",
+        equations=eqs, variables=names, path=name)
+
+
 def _raise_dependency(name, orig, var_names, comb, linear, roles, classes) -> None:
     eqs = sorted(comb)
     owners: list[str] = []
@@ -214,7 +271,8 @@ def _raise_dependency(name, orig, var_names, comb, linear, roles, classes) -> No
     if what is not None:
         _, one, many = next(roles[x] for x in names if x in roles)
     parts = [classes.get(w, "") for w in owners]
-    noun = "sources" if parts and all("Source" in c for c in parts) else "components"
+    noun = "sources" if parts and all("Source" in c or c.startswith("Constant")
+                                      for c in parts) else "components"
     who = _enumerate(owners) if owners else "equations"
     if what is not None and len(owners) > 1:
         head = f"{noun} {who} form a {what}: their {many} are not independent"
@@ -224,17 +282,20 @@ def _raise_dependency(name, orig, var_names, comb, linear, roles, classes) -> No
                 "not free")
     else:
         head = f"the equations of {who} are not independent"
+    single = len(owners) == 1
     if what == "cut set":
-        advice = (f"Remove one source, or give the {one} another path (a resistance, or "
-                  "a damper or spring in mechanics, in parallel with a source).")
+        advice = (("Connect it" if single else "Remove one source, or") +
+                  f" give the {one} another path (a resistance, or a damper or spring in "
+                  "mechanics, in parallel with " + ("it)." if single else "a source)."))
     elif what == "loop":
-        advice = ("Remove one source, or put a resistance (a damper or spring in "
+        advice = (("Remove the connection that shorts it, or" if single else
+                   "Remove one source, or") + " put a resistance (a damper or spring in "
                   "mechanics) in series in the loop.")
     else:
         advice = "Remove a redundant equation or component."
     texts = [str(orig[e]) for e in eqs]
     raise StructuralError(
-        f"model '{name}': {head}. {len(eqs)} equations for {len(unknowns)} unknowns "
+        f"model '{name}': {head}. {len(eqs)} equations for {len(unknowns)} unknown(s) "
         f"({', '.join(names[:8])}{' ...' if len(names) > 8 else ''}). Potential extra "
         f"equation(s): {'; '.join(texts[:6])}{' ...' if len(texts) > 6 else ''}. "
         f"{advice}",

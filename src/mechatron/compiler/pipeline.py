@@ -236,12 +236,20 @@ def _state_preference(flat, alias) -> dict[str, float]:
 def _port_roles(flat, alias) -> dict[str, tuple[str, str, str]]:
     """For each alias representative that stands for port variables: whether they are
     across or through variables and the quantity's name, singular and plural (from the
-    domain of the port: "current", "currents"). For messages about network topology."""
+    domain of the port: "current", "currents"); a component variable in the unit of
+    one quantity of the model's domains (a branch voltage ``v`` in V) counts as that
+    quantity. For messages about network topology."""
     domain_of = {}
     for members in getattr(flat, "connection_sets", None) or []:
         for member in members:
-            path, domain = member[0], member[1]
-            domain_of[path] = domain
+            domain_of[member[0]] = member[1]
+    by_unit: dict[str, set] = {}
+    for domain in set(domain_of.values()):
+        for kind in ("across", "through"):
+            text = getattr(domain, kind, "") or ""
+            if text.endswith(")") and " (" in text:
+                by_unit.setdefault(text.rpartition(" (")[2][:-1], set()).add(
+                    (kind, text))
     roles: dict[str, tuple[str, str, str]] = {}
     for n, var in flat.variables.items():
         if var.kind not in ("across", "through"):
@@ -253,6 +261,12 @@ def _port_roles(flat, alias) -> dict[str, tuple[str, str, str]]:
         text = getattr(domain, var.kind, "") if domain is not None else ""
         one = _quantity(text) or f"{var.kind} variable"
         roles[rep] = (var.kind, one, _plural(one))
+    for n in alias.unknowns:
+        match = by_unit.get(flat.variables[n].unit, ())
+        if n not in roles and len(match) == 1:
+            kind, text = next(iter(match))
+            one = _quantity(text)
+            roles[n] = (kind, one, _plural(one))
     return roles
 
 
