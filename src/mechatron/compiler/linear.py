@@ -106,7 +106,7 @@ def owner_of(origin) -> str:
 
 def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
            var_names: list[str], var_to_diff: list[int], adj: list[list[int]],
-           roles: dict[str, tuple[str, str, str]] | None = None,
+           roles: dict[str, tuple[str, str, str, bool]] | None = None,
            classes: dict[str, str] | None = None) -> Reduction:
     """Reduce the numeric-linear part of the equations; raise on a dependency.
 
@@ -116,9 +116,10 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         Equations, their origins, the variables (unknowns and derivatives), the
         derivative links and the incidence, as in `mechatron.compiler.structure.lower`.
     roles : dict, optional
-        ``roles[name] = ("across" | "through", quantity, plural)`` for unknowns that
-        stand for port variables, e.g. ``("through", "current", "currents")``; for
-        messages.
+        ``roles[name] = ("across" | "through", quantity, plural, is_port)`` for
+        unknowns that stand for port variables (``is_port`` True) or for a branch
+        quantity in the same unit, e.g. ``("through", "current", "currents", True)``;
+        for messages.
     classes : dict, optional
         Class name of each component path, for messages ("sources v1 and v2").
 
@@ -142,14 +143,20 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
             if value:
                 linear[r][c] = exact(value)
     eliminable = [d == -1 for d in var_to_diff]
-    elim = exact_elimination(linear, eliminable)
-    out = Reduction([list(r) for r in adj], const=const)
     nonlinear = {}
 
     def other_terms(k: int) -> list[int]:
         if k not in nonlinear:
             nonlinear[k] = [v for v in adj[k] if v not in const[k]]
         return nonlinear[k]
+
+    # equations whose other terms hold no unknown (Kirchhoff's laws, v = p.v - n.v,
+    # v = V(t)) pivot first: their combinations cancel exactly, while subtracting
+    # c.i == C*der(c.v) would carry der(c.v) into the current laws and hide a cut set
+    pure = [e for e in range(len(res))
+            if not any(eliminable[v] for v in other_terms(e))]
+    elim = exact_elimination(linear, eliminable, first=pure)
+    out = Reduction([list(r) for r in adj], const=const)
 
     for e, row in elim.rows.items():
         if not elim.changed(e):
@@ -225,7 +232,7 @@ def _raise_floating(name, orig, var_names, eliminable, out: Reduction, dependent
                 seen[u] = None
                 queue.append(u)
     names = [var_names[v] for v in seen]
-    across = [x for x in names if roles.get(x, ("",))[0] == "across"]
+    across = [x for x in names if roles.get(x, ("",))[0] == "across" and roles[x][3]]
     eqs = [str(orig[e]) for e in sorted(comb)]
     involved: set[str] = set()
     for e in comb:
@@ -239,7 +246,7 @@ def _raise_floating(name, orig, var_names, eliminable, out: Reduction, dependent
               or x.rpartition(".")[0].rpartition(".")[0] in involved]
     across = inside or across
     if across:
-        _, one, many = roles[across[0]]
+        _, one, many, _ = roles[across[0]]
         nodes = sorted({x.rpartition(".")[0] or x for x in across})
         raise StructuralError(
             f"model '{name}': the {many} at {', '.join(nodes[:8])}"
@@ -247,6 +254,18 @@ def _raise_floating(name, orig, var_names, eliminable, out: Reduction, dependent
             "network has no path to a reference (a floating node). Connect a reference "
             f"to it, or a resistance from it to one (e.g. at {nodes[0]}).",
             equations=eqs, variables=across, path=name)
+    through = [x for x in names if roles.get(x, ("",))[0] == "through" and roles[x][3]]
+    if through:
+        _, one, many, _ = roles[through[0]]
+        ports = sorted({x.rpartition(".")[0] or x for x in through})
+        owners = sorted({owner_of(orig[e]) for e in comb})
+        raise StructuralError(
+            f"model '{name}': the {many} at {', '.join(ports[:8])}"
+            f"{' ...' if len(ports) > 8 else ''} are not determined: the equations of "
+            f"{_enumerate(owners)} fix a quantity that is fixed already (two references "
+            "on one node, or ideal sources in a loop). Keep one reference per node, or "
+            "put a resistance between them.",
+            equations=eqs, variables=through, path=name)
     raise StructuralError(
         f"model '{name}': {len(eqs)} equations add up to 0 == 0, so one equation is "
         f"missing for the unknowns {', '.join(names[:8])}"
@@ -269,7 +288,7 @@ def _raise_dependency(name, orig, var_names, comb, linear, roles, classes) -> No
     what = {"through": "cut set", "across": "loop"}.get(kinds.pop()) if len(kinds) == 1 \
         else None
     if what is not None:
-        _, one, many = next(roles[x] for x in names if x in roles)
+        _, one, many, _ = next(roles[x] for x in names if x in roles)
     parts = [classes.get(w, "") for w in owners]
     noun = "sources" if parts and all("Source" in c or c.startswith("Constant")
                                       for c in parts) else "components"

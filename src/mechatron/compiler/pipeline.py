@@ -233,12 +233,12 @@ def _state_preference(flat, alias) -> dict[str, float]:
     return {n: v for n, v in pref.items() if v}
 
 
-def _port_roles(flat, alias) -> dict[str, tuple[str, str, str]]:
+def _port_roles(flat, alias) -> dict[str, tuple[str, str, str, bool]]:
     """For each alias representative that stands for port variables: whether they are
-    across or through variables and the quantity's name, singular and plural (from the
-    domain of the port: "current", "currents"); a component variable in the unit of
-    one quantity of the model's domains (a branch voltage ``v`` in V) counts as that
-    quantity. For messages about network topology."""
+    across or through variables, the quantity's name, singular and plural (from the
+    domain of the port: "current", "currents"), and True; a component variable in the
+    unit of one quantity of the model's domains (a branch voltage ``v`` in V) counts as
+    that quantity, with False (not a port). For messages about network topology."""
     domain_of = {}
     for members in getattr(flat, "connection_sets", None) or []:
         for member in members:
@@ -250,7 +250,7 @@ def _port_roles(flat, alias) -> dict[str, tuple[str, str, str]]:
             if text.endswith(")") and " (" in text:
                 by_unit.setdefault(text.rpartition(" (")[2][:-1], set()).add(
                     (kind, text))
-    roles: dict[str, tuple[str, str, str]] = {}
+    roles: dict[str, tuple[str, str, str, bool]] = {}
     for n, var in flat.variables.items():
         if var.kind not in ("across", "through"):
             continue
@@ -260,13 +260,13 @@ def _port_roles(flat, alias) -> dict[str, tuple[str, str, str]]:
         domain = domain_of.get(n.rpartition(".")[0])
         text = getattr(domain, var.kind, "") if domain is not None else ""
         one = _quantity(text) or f"{var.kind} variable"
-        roles[rep] = (var.kind, one, _plural(one))
+        roles[rep] = (var.kind, one, _plural(one), True)
     for n in alias.unknowns:
         match = by_unit.get(flat.variables[n].unit, ())
         if n not in roles and len(match) == 1:
             kind, text = next(iter(match))
             one = _quantity(text)
-            roles[n] = (kind, one, _plural(one))
+            roles[n] = (kind, one, _plural(one), False)
     return roles
 
 

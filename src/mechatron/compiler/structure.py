@@ -54,7 +54,7 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
           syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
           start_guess, hints: dict[str, str],
           preference: dict[str, float] | None = None,
-          roles: dict[str, tuple[str, str, str]] | None = None,
+          roles: dict[str, tuple[str, str, str, bool]] | None = None,
           classes: dict[str, str] | None = None,
           physical: set[str] | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
