@@ -152,6 +152,11 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     """
     n_var = len(eliminable)
     ok = [bool(x) for x in eliminable]
+    for e, row in enumerate(linear):
+        for v in row:
+            if not 0 <= v < n_var:
+                raise ValueError(f"equation {e} names column {v}, outside 0 .. "
+                                 f"{n_var - 1}.")
     if rows is None:
         rows = [e for e, row in enumerate(linear) if any(ok[v] for v in row)]
     work: dict[int, dict[int, Coefficient]] = {}
@@ -161,9 +166,6 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     for e in rows:
         row = {}
         for v, a in linear[e].items():
-            if not 0 <= v < n_var:
-                raise ValueError(f"equation {e} names column {v}, outside 0 .. "
-                                 f"{n_var - 1}.")
             if a:
                 row[v] = a
         work[e] = row
