@@ -254,7 +254,7 @@ def _floating_secondary():
 @pytest.mark.parametrize("build, pattern, suspects", [
     (_voltage_sources_in_parallel,
      r"model 'vv': sources v1 and v2 form a loop: their voltages are not independent\. "
-     r"4 equations for 3 unknown\(s\).*Potential extra equation.*Remove one source, or "
+     r"4 equations for 3 unknowns.*Potential extra equation.*Remove one source, or "
      r"put a resistance", {"v1", "v2"}),
     (_voltage_source_triangle,
      r"model 'vvv': sources v1, v2 and v3 form a loop: their voltages are not independent",

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from mechatron.compiler.graph import maximum_matching
+from mechatron.compiler.graph.matching import augment_from
 from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
 from mechatron.errors import StructuralError
 
@@ -42,23 +43,30 @@ class Reduction:
     Attributes
     ----------
     adj : list of list of int
-        Incidence for index reduction: the given one with every changed equation
+        Incidence for index reduction: the given one with every *changed* equation
         replaced by the incidence of its reduced form.
-    changed : dict of int to tuple
-        ``changed[e] = (linear, combination)``: reduced linear part ``{column: coef}``
-        and the multipliers ``{equation: coef}`` of the given equations whose sum it is.
+    reduced : dict of int to tuple
+        For each equation that the exact elimination reduced (a combination of the
+        purely linear equations that leaves no unknown in their linear part):
+        ``(linear, combination, incidence)``, the reduced linear part
+        ``{column: coef}``, the multipliers ``{equation: coef}`` of the given
+        equations whose sum it is, and the variables of that sum.
+    changed : list of int
+        The reduced equations whose constraint the incidence hides (see `reveal`):
+        index reduction sees their reduced form.
     const : list of set of int
         Columns in which each equation is linear with a numeric coefficient.
     """
 
     adj: list[list[int]]
-    changed: dict[int, tuple[dict, dict]] = field(default_factory=dict)
+    reduced: dict[int, tuple[dict, dict, list[int]]] = field(default_factory=dict)
+    changed: list[int] = field(default_factory=list)
     const: list[set[int]] = field(default_factory=list)
 
     def residual(self, e: int, res: list[ca.SX], var_syms: list[ca.SX]) -> ca.SX:
         """The reduced form of equation `e`: its linear part plus the other terms of the
         equations it combines (each with its numeric-linear columns set to zero)."""
-        linear, comb = self.changed[e]
+        linear, comb, _ = self.reduced[e]
         out = ca.SX(0)
         for v, a in sorted(linear.items()):
             out = out + float(a) * var_syms[v]
@@ -150,65 +158,89 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
             nonlinear[k] = [v for v in adj[k] if v not in const[k]]
         return nonlinear[k]
 
-    # equations whose other terms hold no unknown (Kirchhoff's laws, v = p.v - n.v,
-    # v = V(t)) pivot first: their combinations cancel exactly, while subtracting
-    # c.i == C*der(c.v) would carry der(c.v) into the current laws and hide a cut set
+    # the purely linear equations: every unknown in them has a numeric coefficient
+    # (Kirchhoff's laws, v = p.v - n.v, v = V(t)); only their combinations cancel
+    # exactly, the other terms of c.i == C*der(c.v) are taken as generic
     pure = [e for e in range(len(res))
             if not any(eliminable[v] for v in other_terms(e))]
-    elim = exact_elimination(linear, eliminable, first=pure)
+    elim = exact_elimination(linear, eliminable, rows=pure)
     out = Reduction([list(r) for r in adj], const=const)
-
     for e, row in elim.rows.items():
-        if not elim.changed(e):
-            continue
-        comb = elim.combination(e)
+        comb = elim.combination(e) if elim.changed(e) else {e: 1}
         inc = dict.fromkeys(sorted(row))
         for k in sorted(comb):
             inc.update(dict.fromkeys(other_terms(k)))
-        out.changed[e] = (row, comb)
-        out.adj[e] = list(inc)
-    _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out, elim,
+        out.reduced[e] = (row, comb, list(inc))
+    out.changed = _hidden(n, elim, linear, eliminable, pure)
+    for e in out.changed:
+        out.adj[e] = out.reduced[e][2]
+    _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out,
                         linear, roles or {}, classes or {}, n)
     return out
 
 
+def _hidden(n: int, elim: LinearElimination, linear, eliminable, pure) -> list[int]:
+    """The reduced equations whose dependency the incidence does not show.
+
+    The exact rank of the purely linear equations in their unknowns is the number of
+    pivots; their structural rank (a maximum matching) can be larger, and then the
+    matching pairs equations with unknowns that cancel. Starting from the pivot
+    equations, each other equation is added back with its unknowns: if that grows the
+    matching, the incidence would count it as independent, so it is hidden and index
+    reduction must see its reduced form; if not, its dependency is visible in the
+    incidence already (e.g. a kinematic loop closed by a ground), and it stays as
+    written, with the state selection it had."""
+    rows: list[list[int]] = [[] for _ in linear]
+    for e in elim.pivots:
+        rows[e] = [v for v in linear[e] if eliminable[v]]
+    m = maximum_matching(n, rows, allowed=eliminable)
+    eq_to_var, var_to_eq = m.eq_to_var, m.var_to_eq
+    mark = [0] * n
+    hidden = []
+    for stamp, e in enumerate(sorted(elim.rows), start=1):
+        rows[e] = [v for v in linear[e] if eliminable[v]]
+        if rows[e] and augment_from(e, rows, eliminable, eq_to_var, var_to_eq, mark,
+                                    stamp):
+            hidden.append(e)
+            var_to_eq[eq_to_var[e]] = -1
+            eq_to_var[e] = -1
+            rows[e] = []
+    return hidden
+
+
 def _check_dependencies(name, res, orig, var_syms, var_names, eliminable,
-                        out: Reduction, elim: LinearElimination, linear, roles, classes,
-                        n) -> None:
-    """Raise for an equation whose reduced form holds no variable, or for state-only
-    constraints (``c.v == V``) that are dependent among themselves."""
-    empty = [e for e in range(len(res)) if not out.adj[e]]
+                        out: Reduction, linear, roles, classes, n) -> None:
+    """Raise for an equation, or a combination of equations, that holds no variable,
+    and for state-only constraints (``c.v == V``) dependent among themselves."""
+    empty = [e for e in range(len(res)) if not adj_or_reduced(out, e)]
     for e in empty:
-        comb = elim.combination(e) if e in out.changed else {e: 1}
-        value = out.residual(e, res, var_syms) if e in out.changed else res[e]
+        comb = out.reduced[e][1] if e in out.reduced else {e: 1}
+        value = out.residual(e, res, var_syms) if e in out.reduced else res[e]
         if value.is_zero():
             # equations that add up to 0 == 0: one too few, some unknowns are free
             _raise_floating(name, orig, var_names, eliminable, out, e, comb, roles)
         _raise_dependency(name, orig, var_names, comb, linear, roles, classes)
     # constraints linear in states only, with nothing else: dependent among themselves?
-    pure = []
-    for e in range(len(res)):
-        if e in elim.pivots:
-            continue
-        row = out.changed[e][0] if e in out.changed else linear[e]
-        if out.adj[e] and len(row) == len(out.adj[e]) and \
-                not any(eliminable[v] for v in out.adj[e]):
-            pure.append(e)
+    pure = [e for e, (row, _, inc) in out.reduced.items()
+            if inc and len(row) == len(inc) and not any(eliminable[v] for v in inc)]
     if len(pure) < 2:
         return
-    rows = {e: (out.changed[e][0] if e in out.changed else linear[e]) for e in pure}
-    dense = [rows.get(e, {}) for e in range(len(res))]
+    dense = [out.reduced[e][0] if e in out.reduced else {} for e in range(len(res))]
     second = exact_elimination(dense, [True] * n, rows=pure)
     for e, row in second.rows.items():
         if row:
             continue
         total: dict = {}
         for g, m in second.combination(e).items():
-            base = out.changed[g][1] if g in out.changed else {g: 1}
-            for k, b in base.items():
+            for k, b in out.reduced[g][1].items():
                 total[k] = total.get(k, 0) + m * b
         total = {k: a for k, a in total.items() if a}
         _raise_dependency(name, orig, var_names, total, linear, roles, classes)
+
+
+def adj_or_reduced(out: Reduction, e: int) -> list[int]:
+    """Variables of equation `e`, reduced if the elimination reduced it."""
+    return out.reduced[e][2] if e in out.reduced else out.adj[e]
 
 
 def _raise_floating(name, orig, var_names, eliminable, out: Reduction, dependent: int,
@@ -216,7 +248,7 @@ def _raise_floating(name, orig, var_names, eliminable, out: Reduction, dependent
     """Equations that add up to ``0 == 0`` leave unknowns free: name the nodes whose
     across variables are among them (a part of a network with no path to a
     reference), or the free unknowns."""
-    rows = [r if e != dependent else [] for e, r in enumerate(out.adj)]
+    rows = [adj_or_reduced(out, e) if e != dependent else [] for e in range(len(out.adj))]
     m = maximum_matching(len(var_names), rows, allowed=eliminable)
     cols: dict[int, list[int]] = {}
     for e, r in enumerate(rows):
@@ -314,7 +346,7 @@ def _raise_dependency(name, orig, var_names, comb, linear, roles, classes) -> No
         advice = "Remove a redundant equation or component."
     texts = [str(orig[e]) for e in eqs]
     raise StructuralError(
-        f"model '{name}': {head}. {len(eqs)} equations for {len(unknowns)} unknown(s) "
+        f"model '{name}': {head}. {len(eqs)} equations for {len(unknowns)} unknowns "
         f"({', '.join(names[:8])}{' ...' if len(names) > 8 else ''}). Potential extra "
         f"equation(s): {'; '.join(texts[:6])}{' ...' if len(texts) > 6 else ''}. "
         f"{advice}",

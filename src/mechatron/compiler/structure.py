@@ -118,10 +118,10 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     # written (equivalent: the reduced forms add equations that stay)
     reduced = {e: reduction.residual(e, res, var_syms) for e in reduction.changed
                if ir.eq_to_diff[e] != -1}
-    for e, (_, comb) in reduction.changed.items():
+    for e in reduction.changed:
         if e in reduced:
             res[e] = reduced[e]
-            orig[e] = Combined([orig[k] for k in sorted(comb)])
+            orig[e] = Combined([orig[k] for k in sorted(reduction.reduced[e][1])])
         else:
             ir.adj[e] = list(dict.fromkeys(adj[e]))
     differentiated = []
