@@ -43,7 +43,7 @@ TOL = 1e-8            # agreement asked of every branch quantity, relative to it
 SIM = dict(rtol=1e-11, atol=1e-13)
 
 
-# -- networks as data -----------------------------------------------------------------------
+# -- networks as data ----------------------------------------------------------------------
 @dataclass(frozen=True)
 class Branch:
     """One two-terminal element between nodes ``a`` and ``b`` (0 is the reference).
@@ -74,7 +74,7 @@ def waveform(br: Branch, t, order: int = 0):
     return value + (br.offset if order == 0 else 0.0)
 
 
-# -- the reference: modified nodal analysis, shuffled to an ODE ------------------------------
+# -- the reference: modified nodal analysis, shuffled to an ODE ----------------------------
 class MNA:
     """``E x' = A x + sum_j B_j u^(j)(t)`` for the branches, reduced to an ODE."""
 
@@ -215,7 +215,7 @@ class MNA:
         return {"v": np.array(v), "i": np.array(i)}
 
 
-# -- random well-posed networks --------------------------------------------------------------
+# -- random well-posed networks ------------------------------------------------------------
 class _Forest:
     def __init__(self, n):
         self.parent = list(range(n))
@@ -383,7 +383,7 @@ def mechanical_networks(draw, max_nodes: int = 4, max_extra: int = 4):
     return n, _with_starts(draw, branches, n)
 
 
-# -- the same network as a Mechatron model ---------------------------------------------------
+# -- the same network as a Mechatron model -------------------------------------------------
 def _electrical_part(br: Branch, s: float):
     """Library part for `br`; ``s = -1`` when its pins are swapped (source values and
     start values change sign so the physics stays the same)."""
@@ -521,7 +521,7 @@ def test_random_translational_networks_match_mna(net, data):
     check("translational", n, branches, data)
 
 
-# -- the reference itself, on circuits with a closed-form answer -----------------------------
+# -- the reference itself, on circuits with a closed-form answer ---------------------------
 def test_mna_reference_matches_rc_charging_and_an_inductor_fed_by_a_current_source():
     rc = [Branch("V", 1, 0, offset=2.0, part="V"), Branch("R", 1, 2, value=2.0),
           Branch("C", 2, 0, value=0.25, start=0.5)]

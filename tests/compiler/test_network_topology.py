@@ -20,7 +20,7 @@ from mechatron.library import rotational as rot
 SIM = dict(rtol=1e-10, atol=1e-12)
 
 
-# -- the reproduction of the issue: a current source feeding R || C, then an inductor -------
+# -- the reproduction of the issue: a current source feeding R || C, then an inductor ------
 I_SRC, R, C, L = 1.0, 2.0, 1e-3, 1e-3
 
 
@@ -51,11 +51,14 @@ ORIENTATIONS = [dict(zip(("src", "r", "c", "l"), f))
                 for f in itertools.product([False, True], repeat=4)]
 
 
-@pytest.mark.parametrize("order", [("src", "r", "c", "l", "g"), ("g", "l", "c", "r", "src")])
+ORDERS = [("src", "r", "c", "l", "g"), ("g", "l", "c", "r", "src")]
+
+
+@pytest.mark.parametrize("order", ORDERS)
 @pytest.mark.parametrize("flips", ORIENTATIONS,
                          ids=["".join("x" if v else "-" for v in f.values())
                               for f in ORIENTATIONS])
-def test_inductor_in_series_with_a_current_source_compiles_in_every_orientation(flips, order):
+def test_inductor_after_a_current_source_compiles_in_every_orientation(flips, order):
     cm = mt.compile_model(forced_inductor(flips, order))
     assert cm.state_names == ["c.v"], "the inductor current is fixed by the source"
     assert cm.report["differentiated_equations"]
@@ -116,7 +119,7 @@ def test_capacitors_in_series_across_a_source_share_its_voltage_by_their_start_v
     np.testing.assert_allclose(res["c1.v"] + res["c2.v"], 3.0, atol=1e-10)
 
 
-# -- two inductors in series driven by a current source -------------------------------------
+# -- two inductors in series driven by a current source ------------------------------------
 def test_two_inductors_in_series_with_a_sine_current_source_carry_its_current():
     amp, f, l1, l2 = 1.5, 4.0, 1e-3, 2e-3
     m = mt.System("ll")
@@ -184,7 +187,7 @@ def test_spring_in_series_with_a_torque_source_is_a_cut_set_and_compiles():
     np.testing.assert_allclose(res["s1.phi"], T / k, atol=1e-10)
 
 
-# -- truly singular networks ----------------------------------------------------------------
+# -- truly singular networks ---------------------------------------------------------------
 def _voltage_sources_in_parallel():
     m = mt.System("vv")
     a = m.add("v1", el.DCVoltageSource(V=1.0))
@@ -287,5 +290,6 @@ def test_a_loop_of_signal_blocks_still_gets_the_signal_advice():
     m.connect(r.y, s.u1)
     m.connect(s.y, k.u)
     m.connect(k.y, s.u2)
-    with pytest.raises(StructuralError, match=r"algebraic loop through sum, gain.*UnitDelay"):
+    with pytest.raises(StructuralError,
+                       match=r"algebraic loop through sum, gain.*UnitDelay"):
         mt.compile_model(m)

@@ -2,24 +2,26 @@
 
 Kirchhoff's laws and the branch relations ``v = p.v - n.v`` are linear with coefficients
 of ±1. When a cut set of current sources and inductors (or a loop of voltage sources and
-capacitors, or their mechanical analogues: torque sources and springs, velocity sources
-and inertias) closes, a combination of these equations cancels every algebraic unknown
-and leaves a constraint among states and inputs, e.g. ``l.i == I`` for an inductor in
-series with a current source. The incidence does not show it: each equation still
-mentions unknowns, the matching succeeds, Pantelides differentiates nothing and the
-resulting algebraic loop is singular. Whether that happens depended on port orientation
-and declaration order, through alias elimination and the matching's choices.
+capacitors, or a mechanical analogue: a torque source and springs) closes, a combination
+of these equations cancels every algebraic unknown and leaves a constraint among states
+and inputs, e.g. ``l.i == I`` for an inductor in series with a current source. The
+incidence does not show it: each equation still mentions unknowns, the matching
+succeeds, Pantelides differentiates nothing and the resulting algebraic loop is
+singular. Whether that happened depended on port orientation and declaration order,
+through alias elimination and the matching's choices.
 
-`reveal` reduces the constant-coefficient linear part of the equations exactly (see
-`mechatron.compiler.graph.elimination`) and hands index reduction an incidence in which
-such combinations appear as what they are. Equations that index reduction then
-differentiates take their reduced form (`Reduction.residual`); the others stay as
-written, which is equivalent (the reduced forms are the originals plus combinations of
-equations that stay) and keeps their explicit solution forms for the BLT pass.
+`reveal` reduces the *purely linear* equations (every unknown with a numeric
+coefficient) exactly, see `mechatron.compiler.graph.elimination`. A reduced equation
+whose dependency the incidence hides is shown to index reduction in its reduced form;
+if index reduction differentiates it, it is replaced by that form
+(`Reduction.residual`), else it stays as written. Both are equivalent: a reduced
+equation is the given one plus a combination of pivot equations, which stay. Reduced
+equations whose dependency the incidence shows already are left alone, so models
+without hidden constraints compile exactly as before.
 
-A combination that leaves no variable at all is a dependency among the equations: ideal
-sources that form a loop (or a cut set) by themselves. It is reported in physical terms
-by `reveal`.
+A combination that leaves no variable at all is a dependency among the equations:
+ideal sources that form a loop or a cut set by themselves, or a part of a network with
+no path to a reference. `reveal` reports it in physical terms.
 """
 
 from __future__ import annotations
@@ -29,8 +31,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from mechatron.compiler.graph import maximum_matching
-from mechatron.compiler.graph.matching import augment_from
 from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
+from mechatron.compiler.graph.matching import augment_from
 from mechatron.errors import StructuralError
 
 __all__ = ["Reduction", "Combined", "reveal", "owner_of"]
@@ -171,7 +173,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         for k in sorted(comb):
             inc.update(dict.fromkeys(other_terms(k)))
         out.reduced[e] = (row, comb, list(inc))
-    out.changed = _hidden(n, elim, linear, eliminable, pure)
+    out.changed = _hidden(n, elim, linear, eliminable)
     for e in out.changed:
         out.adj[e] = out.reduced[e][2]
     _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out,
@@ -179,7 +181,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     return out
 
 
-def _hidden(n: int, elim: LinearElimination, linear, eliminable, pure) -> list[int]:
+def _hidden(n: int, elim: LinearElimination, linear, eliminable) -> list[int]:
     """The reduced equations whose dependency the incidence does not show.
 
     The exact rank of the purely linear equations in their unknowns is the number of

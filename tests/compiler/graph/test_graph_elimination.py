@@ -1,5 +1,5 @@
 """Tests of `exact_elimination`: exact rank, exact cancellation, combinations that add up,
-pivots on the preferred equations first, and short combinations on long chains."""
+and short combinations on long chains."""
 
 import random
 from fractions import Fraction
@@ -61,19 +61,6 @@ def test_random_integer_systems_rank_and_combinations():
             comb = out.combination(e)
             assert comb[e] == 1 and all(k == e or k in out.pivots for k in comb)
             assert combined(linear, comb) == row
-
-
-def test_preferred_equations_pivot_first():
-    # x in both rows: the preferred row is the pivot, the other is reduced
-    linear = [{0: 1, 1: 1}, {0: 1, 2: 2}]
-    for first in ([0], [1]):
-        out = exact_elimination(linear, [True, False, False], first=first)
-        assert out.pivots == {first[0]: 0}
-    # a preferred row pivots before a row singleton that is not preferred
-    linear = [{0: 1, 1: 1, 3: 1}, {0: 1}, {1: 1, 0: 2}]
-    out = exact_elimination(linear, [True, True, False, False], first=[0, 2])
-    assert set(out.pivots) == {0, 2}
-    assert set(out.rows[1]) == {3} and combined(linear, out.combination(1)) == out.rows[1]
 
 
 def test_a_long_chain_gives_short_combinations():

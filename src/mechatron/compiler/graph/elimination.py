@@ -30,7 +30,7 @@ differential-algebraic equation systems", BIT 57, 2017).
 from __future__ import annotations
 
 import heapq
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from numbers import Rational
@@ -109,8 +109,7 @@ class LinearElimination:
 
 def exact_elimination(linear: Sequence[Mapping[int, Rational]],
                       eliminable: Sequence[bool], *,
-                      rows: Sequence[int] | None = None,
-                      first: Collection[int] | None = None) -> LinearElimination:
+                      rows: Sequence[int] | None = None) -> LinearElimination:
     """Eliminate the eliminable columns from the linear parts of the equations, exactly.
 
     Parameters
@@ -124,12 +123,6 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         ``eliminable[v]``: whether column ``v`` may be eliminated (a pivot column).
     rows : sequence of int, optional
         The equations taking part; default: every equation with an eliminable column.
-    first : collection of int, optional
-        Equations to pivot on first; another equation becomes a pivot (and is
-        subtracted from others) only once no column is left in these. The caller passes
-        the equations that are wholly numeric-linear in the eliminable columns: their
-        combinations cancel exactly, whereas subtracting an equation with other terms
-        would carry those terms into every equation it updates.
 
     Returns
     -------
@@ -147,8 +140,7 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     on the given equations keeps each reduced equation a short combination (in a
     network: the elements of one loop or cut set, not a path across the whole circuit).
     Ties go to the lowest index, so the result depends only on the input. Arithmetic is
-    exact (``int`` and ``Fraction``). A column left in a single equation is eliminated
-    from it whatever `first` says (no other equation changes).
+    exact (``int`` and ``Fraction``).
     """
     n_var = len(eliminable)
     ok = [bool(x) for x in eliminable]
@@ -228,10 +220,6 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
             if count[f] == 1:
                 heapq.heappush(row_singles, (len(updates[f]), f))
 
-    preferred = set(first) if first is not None else set()
-    phase = 1 if first is not None else 2
-    deferred: list[tuple[int, int]] = []     # row singletons not allowed in phase 1
-    parked: list[tuple[int, int]] = []       # columns with no preferred row (phase 1)
     while active:
         if col_singles:
             v = col_singles.pop()
@@ -240,12 +228,8 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
             pivot(next(iter(col_rows[v])), v)
             continue
         if row_singles:
-            key = heapq.heappop(row_singles)
-            e = key[1]
+            _, e = heapq.heappop(row_singles)
             if e not in active or count[e] != 1:
-                continue
-            if phase == 1 and e not in preferred:
-                deferred.append(key)
                 continue
             pivot(e, next(v for v in work[e] if ok[v]))
             continue
@@ -253,23 +237,11 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         while heap:
             n, v = heapq.heappop(heap)
             if v in col_rows and len(col_rows[v]) == n and n:
-                if phase == 1 and preferred.isdisjoint(col_rows[v]):
-                    parked.append((n, v))
-                    continue
                 chosen = v
                 break
         if chosen is None:
-            if phase == 1:
-                phase = 2
-                for key in deferred:
-                    heapq.heappush(row_singles, key)
-                for key in parked:
-                    heapq.heappush(heap, key)
-                deferred, parked = [], []
-                continue
             break
-        e = min((f for f in col_rows[chosen] if phase == 2 or f in preferred),
-                key=lambda f: (count[f], len(updates.get(f, ())), f))
+        e = min(col_rows[chosen], key=lambda f: (count[f], len(updates.get(f, ())), f))
         pivot(e, chosen)
     reduced = {e: work[e] for e in rows if e not in pivots}
     return LinearElimination(pivots=pivots, rows=reduced, updates=updates)
