@@ -369,8 +369,10 @@ def _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
         raise StructuralError(
             f"model '{name}': the network equations of {', '.join(parts)} are singular "
             f"for {', '.join(var_names[v] for v in cols[:8])} with the parameter values "
-            "given (a parameter of 0 or a ratio that makes two elements fix the same "
-            "quantity?). Check the parameter values of these components.",
+            "given: a parameter of 0, or a loop or cut set of ideal elements coupled "
+            "through a parameter (an ideal transformer's or gear's ratio), which the "
+            "compiler does not reduce. Check these parameters, or add a resistance (a "
+            "damper or spring in mechanics) to that loop or cut set.",
             equations=[str(orig[e]) for e in eqs], variables=owners, path=name)
     raise StructuralError(
         f"model '{name}': the algebraic loop through {', '.join(owners)} has no unique "
