@@ -187,6 +187,28 @@ def test_spring_in_series_with_a_torque_source_is_a_cut_set_and_compiles():
     np.testing.assert_allclose(res["s1.phi"], T / k, atol=1e-10)
 
 
+@pytest.mark.xfail(strict=True, raises=StructuralError,
+                   reason="a cut set closed through an ideal transformer's ratio (a "
+                          "parameter) is not reduced; see docs/compiler.md")
+def test_inductor_forced_through_an_ideal_transformer():
+    m = mt.System("transformer_cut_set")
+    i = m.add("i", el.DCCurrentSource(I=1.0))
+    x = m.add("x", el.IdealTransformer(N=2.0))
+    r = m.add("r", el.Resistor(R=2.0))
+    c = m.add("c", el.Capacitor(C=1e-3))
+    ind = m.add("l", el.Inductor(L=1e-3))
+    g = m.add("g", el.ElectricalReference())
+    g2 = m.add("g2", el.ElectricalReference())
+    m.connect(g.port, i.p)
+    m.connect(i.n, x.p1)
+    m.connect(x.n1, g.port)
+    m.connect(x.p2, r.p, c.p)
+    m.connect(r.n, c.n, ind.p)
+    m.connect(ind.n, x.n2, g2.port)
+    res = mt.simulate(m, 0.01, **SIM)
+    np.testing.assert_allclose(np.abs(res["l.i"]), 2.0, atol=1e-8)   # N * I
+
+
 # -- truly singular networks ---------------------------------------------------------------
 def _voltage_sources_in_parallel():
     m = mt.System("vv")
