@@ -129,7 +129,10 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
-                declared={n: i for i, n in enumerate(flat.variables)})
+                declared={n: i for i, n in enumerate(flat.variables)},
+                roles=_port_roles(flat, alias), classes=dict(flat.components),
+                physical={v.owner for v in flat.variables.values()
+                          if v.kind in ("across", "through")})
     lap("structure")
 
     # every logged variable as an expression of the unknowns
@@ -315,6 +318,57 @@ def _state_preference(flat, alias) -> dict[str, float]:
         if prio == "high":
             pref[rep] = pref.get(rep, 0.0) + 0.5
     return {n: v for n, v in pref.items() if v}
+
+
+def _port_roles(flat, alias) -> dict[str, tuple[str, str, str, bool]]:
+    """For each alias representative that stands for port variables: whether they are
+    across or through variables, the quantity's name, singular and plural (from the
+    domain of the port: "current", "currents"), and True; a component variable in the
+    unit of one quantity of the model's domains (a branch voltage ``v`` in V) counts as
+    that quantity, with False (not a port). For messages about network topology."""
+    domain_of = {}
+    for members in getattr(flat, "connection_sets", None) or []:
+        for member in members:
+            domain_of[member[0]] = member[1]
+    by_unit: dict[str, set] = {}
+    for domain in set(domain_of.values()):
+        for kind in ("across", "through"):
+            text = getattr(domain, kind, "") or ""
+            if text.endswith(")") and " (" in text:
+                by_unit.setdefault(text.rpartition(" (")[2][:-1], set()).add(
+                    (kind, text))
+    roles: dict[str, tuple[str, str, str, bool]] = {}
+    for n, var in flat.variables.items():
+        if var.kind not in ("across", "through"):
+            continue
+        rep = alias.eliminated.get(n, (n, 1.0))[0]
+        if rep is None or rep in roles:
+            continue
+        domain = domain_of.get(n.rpartition(".")[0])
+        text = getattr(domain, var.kind, "") if domain is not None else ""
+        one = _quantity(text) or f"{var.kind} variable"
+        roles[rep] = (var.kind, one, _plural(one), True)
+    for n in alias.unknowns:
+        match = by_unit.get(flat.variables[n].unit, ())
+        if n not in roles and len(match) == 1:
+            kind, text = next(iter(match))
+            one = _quantity(text)
+            roles[n] = (kind, one, _plural(one), False)
+    return roles
+
+
+def _quantity(text: str) -> str:
+    """"angular velocity w (rad/s)" -> "angular velocity"."""
+    words = text.split(" (")[0].split(",")[0].split()
+    return " ".join(words[:-1] if len(words) > 1 else words)
+
+
+def _plural(word: str) -> str:
+    if word.endswith("y") and not word.endswith(("ay", "ey", "oy")):
+        return word[:-1] + "ies"
+    if word.endswith(("x", "s")):
+        return word + "es"
+    return word + "s"
 
 
 def _input_default(flat, name: str) -> float:

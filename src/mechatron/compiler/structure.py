@@ -18,6 +18,7 @@ import numpy as np
 
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
+from mechatron.compiler.linear import Combined, owner_of, reveal
 from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
 
@@ -54,7 +55,10 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
           syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
           start_guess, hints: dict[str, str],
           preference: dict[str, float] | None = None,
-          declared: dict[str, int] | None = None) -> Lowered:
+          declared: dict[str, int] | None = None,
+          roles: dict[str, tuple[str, str, str, bool]] | None = None,
+          classes: dict[str, str] | None = None,
+          physical: set[str] | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
@@ -78,6 +82,14 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
         Declaration order of each unknown (its place in the flat model); an exact tie in
         state selection keeps the unknown declared first as a state. Default: the order
         of `unknowns`.
+
+    roles, classes
+        For messages about dependent network equations (see
+        `mechatron.compiler.linear.reveal`): the port role and quantity of each unknown,
+        the class name of each component.
+    physical : set of str, optional
+        Components with physical (conserving) ports: a singular algebraic loop through
+        them is reported as a network problem, not as a loop of signal blocks.
 
     Notes
     -----
@@ -111,10 +123,24 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     _check_counts(name, res, orig, var_names, var_to_diff, adj, hints)
 
     # -- index reduction ------------------------------------------------------------------
+    # constraints hidden in the linear network equations (a cut set of current sources
+    # and inductors, a loop of voltage sources and capacitors) are exposed first
+    reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
+                       classes)
     try:
-        ir = pantelides(len(var_syms), adj, var_to_diff)
+        ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
     except StructuralError as exc:
         _raise_singular(name, orig, var_names, exc, hints)
+    # an equation that is differentiated takes its reduced form; the others stay as
+    # written (equivalent: the reduced forms add equations that stay)
+    reduced = {e: reduction.residual(e, res, var_syms) for e in reduction.changed
+               if ir.eq_to_diff[e] != -1}
+    for e in reduction.changed:
+        if e in reduced:
+            res[e] = reduced[e]
+            orig[e] = Combined([orig[k] for k in sorted(reduction.reduced[e][1])])
+        else:
+            ir.adj[e] = list(dict.fromkeys(adj[e]))
     differentiated = []
     while len(var_syms) < ir.n_var:
         v = len(var_syms)
@@ -193,7 +219,8 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     else:
         for block in blocks:
             if 1 < len(block.equations) <= _LOOP_CHECK_MAX:
-                _check_loop(name, res, orig, var_syms, var_names, block, guess, time)
+                _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
+                            physical or set())
     out = Lowered(states=[var_names[v] for v in states], state_syms=[var_syms[v] for v in states],
                   alg=[], alg_syms=[], ode=[], residuals=[], assigned=[], assigned_expr=[],
                   differentiated=differentiated, n_blocks=len(blocks),
@@ -323,7 +350,8 @@ def _check_selection(name, res, orig, var_syms, var_names, block, guess) -> None
 _LOOP_CHECK_MAX = 200   # largest algebraic loop checked for singularity at compile time
 
 
-def _check_loop(name, res, orig, var_syms, var_names, block, guess, time) -> None:
+def _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
+                physical: set[str]) -> None:
     """An algebraic loop (a strongly connected block of equations) must have a unique
     solution: its Jacobian at the start values must be nonsingular. A singular loop (e.g.
     a sum whose output feeds back through a gain of exactly 1) is reported with the
@@ -355,9 +383,19 @@ def _check_loop(name, res, orig, var_syms, var_names, block, guess, time) -> Non
         return
     owners = []
     for e in eqs:
-        where = getattr(orig[e], "where", None) or str(orig[e]).split(":")[0]
+        where = owner_of(orig[e])
         if where not in owners:
             owners.append(where)
+    if any(w.startswith("connect(") or w in physical for w in owners):
+        parts = [w for w in owners if not w.startswith("connect(")] or owners
+        raise StructuralError(
+            f"model '{name}': the network equations of {', '.join(parts)} are singular "
+            f"for {', '.join(var_names[v] for v in cols[:8])} with the parameter values "
+            "given: a parameter of 0, or a loop or cut set of ideal elements coupled "
+            "through a parameter (an ideal transformer's or gear's ratio), which the "
+            "compiler does not reduce. Check these parameters, or add a resistance (a "
+            "damper or spring in mechanics) to that loop or cut set.",
+            equations=[str(orig[e]) for e in eqs], variables=owners, path=name)
     raise StructuralError(
         f"model '{name}': the algebraic loop through {', '.join(owners)} has no unique "
         f"solution (its {len(eqs)} equations are singular for "

@@ -1,0 +1,361 @@
+"""Constraints hidden in the linear network equations, found before index reduction.
+
+Kirchhoff's laws and the branch relations ``v = p.v - n.v`` are linear with coefficients
+of ±1. When a cut set of current sources and inductors (or a loop of voltage sources and
+capacitors, or a mechanical analogue: a torque source and springs) closes, a combination
+of these equations cancels every algebraic unknown and leaves a constraint among states
+and inputs, e.g. ``l.i == I`` for an inductor in series with a current source. The
+incidence does not show it: each equation still mentions unknowns, the matching
+succeeds, Pantelides differentiates nothing and the resulting algebraic loop is
+singular. Whether that happened depended on port orientation and declaration order,
+through alias elimination and the matching's choices.
+
+`reveal` reduces the *purely linear* equations (every unknown with a numeric
+coefficient) exactly, see `mechatron.compiler.graph.elimination`. A reduced equation
+whose dependency the incidence hides is shown to index reduction in its reduced form;
+if index reduction differentiates it, it is replaced by that form
+(`Reduction.residual`), else it stays as written. Both are equivalent: a reduced
+equation is the given one plus a combination of pivot equations, which stay. Reduced
+equations whose dependency the incidence shows already are left alone, so models
+without hidden constraints compile exactly as before.
+
+A combination that leaves no variable at all is a dependency among the equations:
+ideal sources that form a loop or a cut set by themselves, or a part of a network with
+no path to a reference. `reveal` reports it in physical terms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+
+from mechatron.compiler.graph import maximum_matching
+from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
+from mechatron.compiler.graph.matching import augment_from
+from mechatron.errors import StructuralError
+
+__all__ = ["Reduction", "Combined", "reveal", "owner_of"]
+
+
+@dataclass
+class Reduction:
+    """Result of `reveal`.
+
+    Attributes
+    ----------
+    adj : list of list of int
+        Incidence for index reduction: the given one with every *changed* equation
+        replaced by the incidence of its reduced form.
+    reduced : dict of int to tuple
+        For each equation that the exact elimination reduced (a combination of the
+        purely linear equations that leaves no unknown in their linear part):
+        ``(linear, combination, incidence)``, the reduced linear part
+        ``{column: coef}``, the multipliers ``{equation: coef}`` of the given
+        equations whose sum it is, and the variables of that sum.
+    changed : list of int
+        The reduced equations whose constraint the incidence hides (see `reveal`):
+        index reduction sees their reduced form.
+    const : list of set of int
+        Columns in which each equation is linear with a numeric coefficient.
+    """
+
+    adj: list[list[int]]
+    reduced: dict[int, tuple[dict, dict, list[int]]] = field(default_factory=dict)
+    changed: list[int] = field(default_factory=list)
+    const: list[set[int]] = field(default_factory=list)
+
+    def residual(self, e: int, res: list[ca.SX], var_syms: list[ca.SX]) -> ca.SX:
+        """The reduced form of equation `e`: its linear part plus the other terms of the
+        equations it combines (each with its numeric-linear columns set to zero)."""
+        linear, comb, _ = self.reduced[e]
+        out = ca.SX(0)
+        for v, a in sorted(linear.items()):
+            out = out + float(a) * var_syms[v]
+        for k, m in sorted(comb.items()):
+            cols = sorted(self.const[k])
+            rest = ca.substitute(res[k], ca.vertcat(*[var_syms[v] for v in cols]),
+                                 ca.DM.zeros(len(cols))) if cols else res[k]
+            if not rest.is_zero():
+                out = out + float(m) * rest
+        return out
+
+
+class Combined:
+    """Origin of a reduced equation: the sum of the equations it combines."""
+
+    __slots__ = ("where", "parts")
+
+    def __init__(self, parts: list):
+        self.parts = parts
+        owners = []
+        for p in parts:
+            w = owner_of(p)
+            if w not in owners:
+                owners.append(w)
+        self.where = ", ".join(owners)
+
+    def __str__(self) -> str:
+        return f"{self.where}: combination of {len(self.parts)} equations " \
+               f"({'; '.join(str(p) for p in self.parts[:4])}" \
+               f"{' ...' if len(self.parts) > 4 else ''})"
+
+    __repr__ = __str__
+
+
+def owner_of(origin) -> str:
+    """Component (or connection set) an equation comes from."""
+    where = getattr(origin, "where", None)
+    if where:
+        return str(where)
+    text = str(origin)
+    if text.startswith("connect("):
+        return text[:text.index(")") + 1] if ")" in text else text
+    return text.split(":")[0]
+
+
+def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
+           var_names: list[str], var_to_diff: list[int], adj: list[list[int]],
+           roles: dict[str, tuple[str, str, str, bool]] | None = None,
+           classes: dict[str, str] | None = None) -> Reduction:
+    """Reduce the numeric-linear part of the equations; raise on a dependency.
+
+    Parameters
+    ----------
+    res, orig, var_syms, var_names, var_to_diff, adj
+        Equations, their origins, the variables (unknowns and derivatives), the
+        derivative links and the incidence, as in `mechatron.compiler.structure.lower`.
+    roles : dict, optional
+        ``roles[name] = ("across" | "through", quantity, plural, is_port)`` for
+        unknowns that stand for port variables (``is_port`` True) or for a branch
+        quantity in the same unit, e.g. ``("through", "current", "currents", True)``;
+        for messages.
+    classes : dict, optional
+        Class name of each component path, for messages ("sources v1 and v2").
+
+    Raises
+    ------
+    StructuralError
+        If a combination of the equations holds no variable: the equations are
+        dependent (a loop of ideal across sources, a cut set of ideal through sources).
+    """
+    n = len(var_syms)
+    if not res:
+        return Reduction([list(r) for r in adj])
+    jac = ca.jacobian(ca.vertcat(*res), ca.vertcat(*var_syms))
+    rows, cols = jac.sparsity().get_triplet()
+    const: list[set[int]] = [set() for _ in res]
+    linear: list[dict] = [{} for _ in res]
+    for r, c, z in zip(rows, cols, jac.nonzeros()):
+        if z.is_constant():
+            const[r].add(c)
+            value = float(z)
+            if value:
+                linear[r][c] = exact(value)
+    eliminable = [d == -1 for d in var_to_diff]
+    nonlinear = {}
+
+    def other_terms(k: int) -> list[int]:
+        if k not in nonlinear:
+            nonlinear[k] = [v for v in adj[k] if v not in const[k]]
+        return nonlinear[k]
+
+    # the purely linear equations: every unknown in them has a numeric coefficient
+    # (Kirchhoff's laws, v = p.v - n.v, v = V(t)); only their combinations cancel
+    # exactly, the other terms of c.i == C*der(c.v) are taken as generic
+    pure = [e for e in range(len(res))
+            if not any(eliminable[v] for v in other_terms(e))]
+    elim = exact_elimination(linear, eliminable, rows=pure)
+    out = Reduction([list(r) for r in adj], const=const)
+    for e, row in elim.rows.items():
+        comb = elim.combination(e) if elim.changed(e) else {e: 1}
+        inc = dict.fromkeys(sorted(row))
+        for k in sorted(comb):
+            inc.update(dict.fromkeys(other_terms(k)))
+        out.reduced[e] = (row, comb, list(inc))
+    out.changed = _hidden(n, elim, linear, eliminable)
+    for e in out.changed:
+        out.adj[e] = out.reduced[e][2]
+    _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out,
+                        linear, roles or {}, classes or {}, n)
+    return out
+
+
+def _hidden(n: int, elim: LinearElimination, linear, eliminable) -> list[int]:
+    """The reduced equations whose dependency the incidence does not show.
+
+    The exact rank of the purely linear equations in their unknowns is the number of
+    pivots; their structural rank (a maximum matching) can be larger, and then the
+    matching pairs equations with unknowns that cancel. Starting from the pivot
+    equations, each other equation is added back with its unknowns: if that grows the
+    matching, the incidence would count it as independent, so it is hidden and index
+    reduction must see its reduced form; if not, its dependency is visible in the
+    incidence already (e.g. a kinematic loop closed by a ground), and it stays as
+    written, with the state selection it had."""
+    rows: list[list[int]] = [[] for _ in linear]
+    for e in elim.pivots:
+        rows[e] = [v for v in linear[e] if eliminable[v]]
+    m = maximum_matching(n, rows, allowed=eliminable)
+    eq_to_var, var_to_eq = m.eq_to_var, m.var_to_eq
+    mark = [0] * n
+    hidden = []
+    for stamp, e in enumerate(sorted(elim.rows), start=1):
+        rows[e] = [v for v in linear[e] if eliminable[v]]
+        if rows[e] and augment_from(e, rows, eliminable, eq_to_var, var_to_eq, mark,
+                                    stamp):
+            hidden.append(e)
+            var_to_eq[eq_to_var[e]] = -1
+            eq_to_var[e] = -1
+            rows[e] = []
+    return hidden
+
+
+def _check_dependencies(name, res, orig, var_syms, var_names, eliminable,
+                        out: Reduction, linear, roles, classes, n) -> None:
+    """Raise for an equation, or a combination of equations, that holds no variable,
+    and for state-only constraints (``c.v == V``) dependent among themselves."""
+    empty = [e for e in range(len(res)) if not adj_or_reduced(out, e)]
+    for e in empty:
+        comb = out.reduced[e][1] if e in out.reduced else {e: 1}
+        value = out.residual(e, res, var_syms) if e in out.reduced else res[e]
+        if value.is_zero():
+            # equations that add up to 0 == 0: one too few, some unknowns are free
+            _raise_floating(name, orig, var_names, eliminable, out, e, comb, roles)
+        _raise_dependency(name, orig, var_names, comb, linear, roles, classes)
+    # constraints linear in states only, with nothing else: dependent among themselves?
+    pure = [e for e, (row, _, inc) in out.reduced.items()
+            if inc and len(row) == len(inc) and not any(eliminable[v] for v in inc)]
+    if len(pure) < 2:
+        return
+    dense = [out.reduced[e][0] if e in out.reduced else {} for e in range(len(res))]
+    second = exact_elimination(dense, [True] * n, rows=pure)
+    for e, row in second.rows.items():
+        if row:
+            continue
+        total: dict = {}
+        for g, m in second.combination(e).items():
+            for k, b in out.reduced[g][1].items():
+                total[k] = total.get(k, 0) + m * b
+        total = {k: a for k, a in total.items() if a}
+        _raise_dependency(name, orig, var_names, total, linear, roles, classes)
+
+
+def adj_or_reduced(out: Reduction, e: int) -> list[int]:
+    """Variables of equation `e`, reduced if the elimination reduced it."""
+    return out.reduced[e][2] if e in out.reduced else out.adj[e]
+
+
+def _raise_floating(name, orig, var_names, eliminable, out: Reduction, dependent: int,
+                    comb, roles) -> None:
+    """Equations that add up to ``0 == 0`` leave unknowns free: name the nodes whose
+    across variables are among them (a part of a network with no path to a
+    reference), or the free unknowns."""
+    rows = [adj_or_reduced(out, e) if e != dependent else [] for e in range(len(out.adj))]
+    m = maximum_matching(len(var_names), rows, allowed=eliminable)
+    cols: dict[int, list[int]] = {}
+    for e, r in enumerate(rows):
+        for v in r:
+            cols.setdefault(v, []).append(e)
+    free = [v for v in range(len(var_names)) if eliminable[v] and m.var_to_eq[v] == -1]
+    seen = dict.fromkeys(free)
+    queue = list(free)
+    for v in queue:                      # alternating paths from the free unknowns
+        for e in cols.get(v, ()):
+            u = m.eq_to_var[e]
+            if u != -1 and u not in seen:
+                seen[u] = None
+                queue.append(u)
+    names = [var_names[v] for v in seen]
+    across = [x for x in names if roles.get(x, ("",))[0] == "across" and roles[x][3]]
+    eqs = [str(orig[e]) for e in sorted(comb)]
+    involved: set[str] = set()
+    for e in comb:
+        w = owner_of(orig[e])
+        if w.startswith("connect("):
+            for port in w[len("connect("):-1].split(","):
+                involved.update((port.strip(), port.strip().rpartition(".")[0]))
+        else:
+            involved.add(w)
+    inside = [x for x in across if x.rpartition(".")[0] in involved
+              or x.rpartition(".")[0].rpartition(".")[0] in involved]
+    across = inside or across
+    if across:
+        _, one, many, _ = roles[across[0]]
+        nodes = sorted({x.rpartition(".")[0] or x for x in across})
+        raise StructuralError(
+            f"model '{name}': the {many} at {', '.join(nodes[:8])}"
+            f"{' ...' if len(nodes) > 8 else ''} are not determined: this part of the "
+            "network has no path to a reference (a floating node). Connect a reference "
+            f"to it, or a resistance from it to one (e.g. at {nodes[0]}).",
+            equations=eqs, variables=across, path=name)
+    through = [x for x in names if roles.get(x, ("",))[0] == "through" and roles[x][3]]
+    if through:
+        _, one, many, _ = roles[through[0]]
+        ports = sorted({x.rpartition(".")[0] or x for x in through})
+        owners = sorted({owner_of(orig[e]) for e in comb})
+        raise StructuralError(
+            f"model '{name}': the {many} at {', '.join(ports[:8])}"
+            f"{' ...' if len(ports) > 8 else ''} are not determined: the equations of "
+            f"{_enumerate(owners)} fix a quantity that is fixed already (two references "
+            "on one node, or ideal sources in a loop). Keep one reference per node, or "
+            "put a resistance between them.",
+            equations=eqs, variables=through, path=name)
+    raise StructuralError(
+        f"model '{name}': {len(eqs)} equations add up to 0 == 0, so one equation is "
+        f"missing for the unknowns {', '.join(names[:8])}"
+        f"{' ...' if len(names) > 8 else ''}. Redundant equations: "
+        f"{'; '.join(eqs[:6])}{' ...' if len(eqs) > 6 else ''}. Remove one, or add the "
+        "equation that determines these unknowns.",
+        equations=eqs, variables=names, path=name)
+
+
+def _raise_dependency(name, orig, var_names, comb, linear, roles, classes) -> None:
+    eqs = sorted(comb)
+    owners: list[str] = []
+    for e in eqs:
+        w = owner_of(orig[e])
+        if not w.startswith("connect(") and w not in owners:
+            owners.append(w)
+    unknowns = sorted({v for e in eqs for v in linear[e]})
+    names = [var_names[v] for v in unknowns]
+    kinds = {roles[x][0] for x in names if x in roles}
+    what = {"through": "cut set", "across": "loop"}.get(kinds.pop()) if len(kinds) == 1 \
+        else None
+    if what is not None:
+        _, one, many, _ = next(roles[x] for x in names if x in roles)
+    parts = [classes.get(w, "") for w in owners]
+    noun = "sources" if parts and all("Source" in c or c.startswith("Constant")
+                                      for c in parts) else "components"
+    who = _enumerate(owners) if owners else "equations"
+    if what is not None and len(owners) > 1:
+        head = f"{noun} {who} form a {what}: their {many} are not independent"
+    elif what is not None:
+        short = "a short circuit" if what == "loop" else "an open circuit"
+        head = (f"{noun[:-1]} {who} forms a {what} by itself ({short}?): its {one} is "
+                "not free")
+    else:
+        head = f"the equations of {who} are not independent"
+    single = len(owners) == 1
+    if what == "cut set":
+        advice = (("Connect it" if single else "Remove one source, or") +
+                  f" give the {one} another path (a resistance, or a damper or spring in "
+                  "mechanics, in parallel with " + ("it)." if single else "a source)."))
+    elif what == "loop":
+        advice = (("Remove the connection that shorts it, or" if single else
+                   "Remove one source, or") + " put a resistance (a damper or spring in "
+                  "mechanics) in series in the loop.")
+    else:
+        advice = "Remove a redundant equation or component."
+    texts = [str(orig[e]) for e in eqs]
+    raise StructuralError(
+        f"model '{name}': {head}. {len(eqs)} equations for {len(unknowns)} unknowns "
+        f"({', '.join(names[:8])}{' ...' if len(names) > 8 else ''}). Potential extra "
+        f"equation(s): {'; '.join(texts[:6])}{' ...' if len(texts) > 6 else ''}. "
+        f"{advice}",
+        equations=texts, variables=owners or names, path=name)
+
+
+def _enumerate(items: list[str]) -> str:
+    if len(items) == 1:
+        return items[0]
+    return ", ".join(items[:-1]) + " and " + items[-1]

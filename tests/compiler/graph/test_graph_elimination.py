@@ -1,0 +1,96 @@
+"""Tests of `exact_elimination`: exact rank, exact cancellation, combinations that add up,
+and short combinations on long chains."""
+
+import random
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from mechatron.compiler.graph.elimination import exact, exact_elimination
+
+
+def combined(linear, comb):
+    """Sum of ``m * linear[e]`` over the combination, with exact zeros dropped."""
+    out = {}
+    for e, m in comb.items():
+        for v, a in linear[e].items():
+            out[v] = out.get(v, 0) + m * a
+    return {v: a for v, a in out.items() if a}
+
+
+def test_two_current_laws_that_differ_by_states_only_reveal_the_cut_set():
+    # columns: 0 c.i, 1 r.i (unknowns), 2 l.i, 3 src.i (knowns here)
+    linear = [{0: 1, 1: 1, 3: -1},        # node 1: c.i + r.i = src.i
+              {2: 1, 0: -1, 1: -1}]       # node 2: l.i = c.i + r.i
+    out = exact_elimination(linear, [True, True, False, False])
+    assert len(out.pivots) == 1, "two rows, rank one in the unknowns"
+    (e, row), = out.rows.items()
+    assert row == {2: 1, 3: -1} or row == {2: -1, 3: 1}
+    assert combined(linear, out.combination(e)) == row
+    assert out.changed(e)
+
+
+def test_fractions_cancel_exactly():
+    third = Fraction(1, 3)
+    linear = [{0: third, 1: 1}, {0: 1, 1: 3, 2: 1}]
+    out = exact_elimination(linear, [True, True, False])
+    (e, row), = out.rows.items()
+    assert set(row) == {2}, "0.333... x + y and x + 3 y differ by a factor 3 exactly"
+    assert exact(0.1) == Fraction(0.1) and exact(-2.0) == -2 and type(exact(3.0)) is int
+
+
+def test_random_integer_systems_rank_and_combinations():
+    rng = random.Random(5)
+    for _ in range(200):
+        n_rows, n_cols = rng.randint(1, 7), rng.randint(1, 7)
+        linear = [{v: rng.choice([-2, -1, 1, 1, 2, 3]) for v in range(n_cols)
+                   if rng.random() < 0.4} for _ in range(n_rows)]
+        # a few exact dependencies
+        if n_rows > 2 and rng.random() < 0.5:
+            linear[-1] = combined(linear, {0: 1, 1: -2})
+        eliminable = [rng.random() < 0.7 for _ in range(n_cols)]
+        out = exact_elimination(linear, eliminable)
+        cols = [v for v in range(n_cols) if eliminable[v]]
+        rows = [e for e in range(n_rows) if any(eliminable[v] for v in linear[e])]
+        a = np.array([[float(linear[e].get(v, 0)) for v in cols] for e in rows]
+                     ).reshape(len(rows), len(cols))
+        assert len(out.pivots) == (np.linalg.matrix_rank(a) if a.size else 0)
+        for e, row in out.rows.items():
+            assert not any(eliminable[v] for v in row)
+            comb = out.combination(e)
+            assert comb[e] == 1 and all(k == e or k in out.pivots for k in comb)
+            assert combined(linear, comb) == row
+
+
+def test_a_long_chain_gives_short_combinations():
+    """An RC ladder's current laws and branch relations: every reduced equation combines
+    a handful of given ones, whatever the length (no path across the whole ladder)."""
+    n = 300
+    linear, eliminable = [], []
+
+    def col(name, unknown=True):
+        eliminable.append(unknown)
+        return len(eliminable) - 1
+
+    pot = [col(f"phi{k}") for k in range(n + 1)]
+    cur = [col(f"i{k}") for k in range(n)]
+    cap = [col(f"ic{k}") for k in range(n)]
+    vc = [col(f"vc{k}", unknown=False) for k in range(n)]
+    linear.append({pot[0]: 1})                                   # source: phi0 = V
+    for k in range(n):
+        linear.append({pot[k]: 1, pot[k + 1]: -1})               # R: phi_k - phi_k+1 = R i
+        linear.append({vc[k]: 1, pot[k + 1]: -1})                # C: vc = phi_k+1
+        linear.append({cap[k]: 1})                               # C: ic = C der(vc)
+        law = {cur[k]: 1, cap[k]: -1}
+        if k + 1 < n:
+            law[cur[k + 1]] = -1
+        linear.append(law)                                       # KCL at node k+1
+    out = exact_elimination(linear, eliminable)
+    assert len(out.rows) == n
+    assert max(len(out.combination(e)) for e in out.rows) <= 6
+
+
+def test_malformed_input_is_refused():
+    with pytest.raises(ValueError, match="column 5"):
+        exact_elimination([{5: 1}], [True])
