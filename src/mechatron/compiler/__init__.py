@@ -1,4 +1,4 @@
-"""The compiler: model instance -> :class:`CompiledModel` (DESIGN.md §4)."""
+"""The compiler: model instance -> :class:`CompiledModel` (docs/compiler.md)."""
 
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.compiler.pipeline import compile_model

@@ -500,7 +500,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
             if isinstance(decl, (Input, Output)):
                 sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
     joined = []
-    tried: set[tuple] = set()  # ports of a failed connect: not reported again as unconnected
+    tried: set[tuple] = set()  # ports of a failed connect: not reported again as open
     for con, writer in connects:
         where = writer.path or flat.name
         resolved = []
@@ -546,8 +546,8 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
             for key, decl in type(el)._declarations.items():
                 if isinstance(decl, Input) and port_key(SignalRef(el, key)) not in \
                         connected and el is not model:  # the root's: external inputs
-                    problems.append(f"signal input '{_join(el.path, key)}' is not connected. "
-                                    "Connect a source, e.g. blocks.Constant.")
+                    problems.append(f"signal input '{_join(el.path, key)}' is not "
+                                    "connected. Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, sets, problems)
 
 

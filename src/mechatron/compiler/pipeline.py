@@ -1,4 +1,4 @@
-"""``compile_model``: the passes of DESIGN.md §4 in order, timed and counted."""
+"""``compile_model``: the passes of docs/compiler.md in order, timed and counted."""
 
 from __future__ import annotations
 

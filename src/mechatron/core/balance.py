@@ -16,8 +16,9 @@ they assign that no equation differentiates (a discrete state, see
 Connections inside a composite generate, per connection set of ``n`` physical ports,
 ``(n - 1)`` equalities of each across variable and one sum of each through variable
 (Modelica's rule: the component's own connectors enter that sum with a minus sign; sets
-are built by :mod:`mechatron.core.connections`, as the compiler builds them); a through variable of a sub-component's connector that no
-``connect`` touches gets the equation ``through = 0``. A signal set of ``n`` signals gives
+are built by :mod:`mechatron.core.connections`, as the compiler builds them); a through
+variable of a sub-component's connector that no ``connect`` touches gets the equation
+``through = 0``. A signal set of ``n`` signals gives
 ``n - 1`` equalities.
 
 The check instantiates the class with its defaults (parameter values do not matter: the

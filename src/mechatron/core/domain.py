@@ -1,10 +1,10 @@
 """Physical domains.
 
-A domain is named by its across/through pair (DESIGN.md §2) and carries what tools need to
-know of it: the colour of its connection lines in diagrams, and whether every network of it
-needs a reference (a ground). A connector class names its domain (``class Pin(Connector,
-domain=ELECTRICAL)``); adding a domain means creating a :class:`Domain` and a connector,
-without editing any base class.
+A domain is named by its across/through pair (docs/modeling.md) and carries what tools
+need to know of it: the colour of its connection lines in diagrams, and whether every
+network of it needs a reference (a ground). A connector class names its domain (``class
+Pin(Connector, domain=ELECTRICAL)``); adding a domain means creating a :class:`Domain`
+and a connector, without editing any base class.
 """
 
 from __future__ import annotations

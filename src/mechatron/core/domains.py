@@ -1,5 +1,5 @@
-"""The domains of the foundation library (DESIGN.md §2, the seed's table of across and
-through variables). Colours follow Simscape's connection lines."""
+"""The domains of the foundation library (docs/modeling.md; the seed thesis's table of
+across and through variables). Colours follow Simscape's connection lines."""
 
 from mechatron.core.domain import Domain
 

@@ -1,4 +1,4 @@
-"""Fixed-step solvers: one CasADi step function per method (DESIGN.md §2).
+"""Fixed-step solvers: one CasADi step function per method (docs/solvers.md).
 
 ``step(X, u, p, t) -> (X_next, y)`` advances the integration state by one step ``h`` and
 returns every logged variable at the new point. Desktop simulation runs it with

@@ -1,4 +1,4 @@
-"""Consistent initialization (DESIGN.md §4, pass 7).
+"""Consistent initialization (docs/compiler.md, docs/solvers.md).
 
 States take their start values. When an algebraic loop remains, or a start value targets a
 variable that is not a state (the velocity of the second of two geared inertias, the
