@@ -294,6 +294,11 @@ class SimResult:
         return (f"<SimResult{model}: {len(self._names)} variables, {self._t.size} time "
                 f"points, t = {self._t[0]:g} .. {self._t[-1]:g} s>")
 
+    def _repr_html_(self) -> str:
+        """Notebook display: the solver profile, final values and a plot."""
+        from mechatron._html import result_html
+        return result_html(self)
+
     def final(self, name: str) -> float:
         """Return the value of a variable at the last time point.
 

@@ -181,6 +181,11 @@ class CompiledModel:
                 state[key] = ca.Function.deserialize(state[key])
         self.__dict__.update(state)
 
+    def _repr_html_(self) -> str:
+        """Notebook display: sizes, states and the passes' timings."""
+        from mechatron._html import compiled_html
+        return compiled_html(self)
+
     def __repr__(self) -> str:
         return (f"<CompiledModel '{self.name}': {self.nx} states, {self.nz} algebraic, "
                 f"{len(self.param_names)} parameters, {len(self.names)} logged variables, "

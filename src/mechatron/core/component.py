@@ -195,6 +195,11 @@ class Element:
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.path or self._name or '(top)'}>"
 
+    def _repr_html_(self) -> str:
+        """Notebook display: parameters with values and units, ports, parts."""
+        from mechatron._html import component_html
+        return component_html(self)
+
     # -- symbols (bound by the compiler) -------------------------------------------------
     def _symbol(self, name: str):
         if self._syms is not None:
