@@ -10,7 +10,24 @@ from mechatron.library.electrical.passive import Diode
 __all__ = ["HalfBridge", "HBridge", "ThreePhaseBridge"]
 
 
-class HalfBridge(Component):
+class SwitchData(Component, partial=True):
+    """The switch and diode data every bridge of this module declares once and passes on
+    to its legs."""
+
+    R_on = Parameter("Ohm", default=1e-3, min=0, doc="Switch on-resistance (> 0)")
+    G_off = Parameter("S", default=1e-8, min=0, doc="Switch off-conductance")
+    V_f = Parameter("V", default=0.7, doc="Diode forward voltage")
+    R_d = Parameter("Ohm", default=1e-3, min=0, doc="Diode on-resistance (> 0)")
+    G_d = Parameter("S", default=1e-8, min=0, doc="Diode off-conductance")
+
+
+def _leg():
+    """A :class:`HalfBridge` whose data are the enclosing bridge's own (passed on)."""
+    d = SwitchData
+    return HalfBridge(R_on=d.R_on, G_off=d.G_off, V_f=d.V_f, R_d=d.R_d, G_d=d.G_d)
+
+
+class HalfBridge(SwitchData):
     """One leg of a bridge: a high-side and a low-side ideal switch, each with an
     antiparallel diode (MSL's ``PowerConverters`` legs, Simscape's ``Half-Bridge``).
 
@@ -25,22 +42,16 @@ class HalfBridge(Component):
     at once (a short circuit of the supply through ``2 R_on``).
     """
 
-    R_on = Parameter("Ohm", default=1e-3, min=0, doc="Switch on-resistance (> 0)")
-    G_off = Parameter("S", default=1e-8, min=0, doc="Switch off-conductance")
-    V_f = Parameter("V", default=0.7, doc="Diode forward voltage")
-    R_d = Parameter("Ohm", default=1e-3, min=0, doc="Diode on-resistance (> 0)")
-    G_d = Parameter("S", default=1e-8, min=0, doc="Diode off-conductance")
-
     dc_p = Pin(doc="Positive DC terminal")
     dc_n = Pin(doc="Negative DC terminal")
     out = Pin(doc="Output (phase) terminal")
     fire_p = Input("1", doc="Gate of the high-side switch (closed above 0.5)")
     fire_n = Input("1", doc="Gate of the low-side switch (closed above 0.5)")
 
-    s_p = IdealSwitch(R_on=R_on, G_off=G_off)
-    d_p = Diode(Vf=V_f, Ron=R_d, Goff=G_d)
-    s_n = IdealSwitch(R_on=R_on, G_off=G_off)
-    d_n = Diode(Vf=V_f, Ron=R_d, Goff=G_d)
+    s_p = IdealSwitch(R_on=SwitchData.R_on, G_off=SwitchData.G_off)
+    d_p = Diode(Vf=SwitchData.V_f, Ron=SwitchData.R_d, Goff=SwitchData.G_d)
+    s_n = IdealSwitch(R_on=SwitchData.R_on, G_off=SwitchData.G_off)
+    d_n = Diode(Vf=SwitchData.V_f, Ron=SwitchData.R_d, Goff=SwitchData.G_d)
 
     def equations(self):
         return [connect(self.dc_p, self.s_p.p, self.d_p.n),
@@ -50,7 +61,7 @@ class HalfBridge(Component):
                 connect(self.fire_n, self.s_n.control)]
 
 
-class HBridge(Component):
+class HBridge(SwitchData):
     """Full (H) bridge: two :class:`HalfBridge` legs between ``dc_p`` and ``dc_n``, the
     load between ``out_a`` and ``out_b`` (MSL's ``DCDC.HBridge``, Simscape's
     ``H-Bridge`` with ideal switches).
@@ -66,12 +77,6 @@ class HBridge(Component):
     Limitations: as :class:`HalfBridge`; never fire both diagonals at once.
     """
 
-    R_on = Parameter("Ohm", default=1e-3, min=0, doc="Switch on-resistance (> 0)")
-    G_off = Parameter("S", default=1e-8, min=0, doc="Switch off-conductance")
-    V_f = Parameter("V", default=0.7, doc="Diode forward voltage")
-    R_d = Parameter("Ohm", default=1e-3, min=0, doc="Diode on-resistance (> 0)")
-    G_d = Parameter("S", default=1e-8, min=0, doc="Diode off-conductance")
-
     dc_p = Pin(doc="Positive DC terminal")
     dc_n = Pin(doc="Negative DC terminal")
     out_a = Pin(doc="Output of leg a")
@@ -79,8 +84,8 @@ class HBridge(Component):
     fire_p = Input("1", doc="Closes high side a and low side b (positive output)")
     fire_n = Input("1", doc="Closes high side b and low side a (negative output)")
 
-    leg_a = HalfBridge(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d, G_d=G_d)
-    leg_b = HalfBridge(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d, G_d=G_d)
+    leg_a = _leg()
+    leg_b = _leg()
 
     def equations(self):
         return [connect(self.dc_p, self.leg_a.dc_p, self.leg_b.dc_p),
@@ -91,7 +96,7 @@ class HBridge(Component):
                 connect(self.fire_n, self.leg_b.fire_p, self.leg_a.fire_n)]
 
 
-class ThreePhaseBridge(Component):
+class ThreePhaseBridge(SwitchData):
     """Three-phase two-level bridge (inverter or rectifier): three :class:`HalfBridge`
     legs between ``dc_p`` and ``dc_n`` with phase outputs ``a``, ``b``, ``c`` (MSL's
     ``DCAC.MultiPhase2Level``, Simscape's ``Converter (Three-Phase)`` with ideal
@@ -103,12 +108,6 @@ class ThreePhaseBridge(Component):
     the phase current freewheels through a diode. With all gates low it is a six-pulse
     diode rectifier.
     """
-
-    R_on = Parameter("Ohm", default=1e-3, min=0, doc="Switch on-resistance (> 0)")
-    G_off = Parameter("S", default=1e-8, min=0, doc="Switch off-conductance")
-    V_f = Parameter("V", default=0.7, doc="Diode forward voltage")
-    R_d = Parameter("Ohm", default=1e-3, min=0, doc="Diode on-resistance (> 0)")
-    G_d = Parameter("S", default=1e-8, min=0, doc="Diode off-conductance")
 
     dc_p = Pin(doc="Positive DC terminal")
     dc_n = Pin(doc="Negative DC terminal")
@@ -122,9 +121,9 @@ class ThreePhaseBridge(Component):
     fire_c_p = Input("1", doc="Gate of the high-side switch of leg c")
     fire_c_n = Input("1", doc="Gate of the low-side switch of leg c")
 
-    leg_a = HalfBridge(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d, G_d=G_d)
-    leg_b = HalfBridge(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d, G_d=G_d)
-    leg_c = HalfBridge(R_on=R_on, G_off=G_off, V_f=V_f, R_d=R_d, G_d=G_d)
+    leg_a = _leg()
+    leg_b = _leg()
+    leg_c = _leg()
 
     def equations(self):
         return [connect(self.dc_p, self.leg_a.dc_p, self.leg_b.dc_p, self.leg_c.dc_p),
