@@ -21,7 +21,7 @@ from mechatron.library.rotational.interfaces import TwoFlange
 from mechatron.library.rotational.stickslip import initial_mode, stick_slip
 
 __all__ = ["PartialFriction", "Clutch", "Brake", "OneWayClutch", "BearingFriction",
-           "speed_table"]
+           "speed_table", "SpeedTableOption"]
 
 
 def speed_table(rows, name: str, owner: str, start_at_zero: bool = True) -> np.ndarray:
@@ -52,6 +52,20 @@ def table_value(x, table: np.ndarray):
     return piecewise_linear(x, table[:, 0], table[:, 1])
 
 
+class SpeedTableOption:
+    """Mixin for a friction element with an optional table over speed, given as the
+    constructor keyword named by ``table_keyword`` (rows checked by
+    :func:`speed_table`); the checked array, or None, is ``self._table``."""
+
+    table_keyword = "stribeck_table"
+
+    def __init__(self, **kwargs):
+        rows = kwargs.pop(self.table_keyword, None)
+        super().__init__(**kwargs)
+        self._table = None if rows is None else \
+            speed_table(rows, self.table_keyword, type(self).__name__)
+
+
 class PartialFriction(TwoFlange, partial=True):
     """Stuck/sliding friction between flanges A and B (Modelica's ``PartialFriction``).
 
@@ -80,7 +94,7 @@ class PartialFriction(TwoFlange, partial=True):
         return [initial_mode(self.mode, self.w, self._backward)]
 
 
-class _DiscFriction(PartialFriction, partial=True):
+class _DiscFriction(SpeedTableOption, PartialFriction, partial=True):
     """Friction discs pressed together by a normal force (clutch and brake)."""
 
     f_n = Input("N", doc="Normal force pressing the discs together")
@@ -93,15 +107,12 @@ class _DiscFriction(PartialFriction, partial=True):
     w_ref = Parameter("rad/s", default=1.0, min=0,
                       doc="Unit of the speed column of mu_table")
 
-    def __init__(self, mu_table=None, **kwargs):
-        super().__init__(**kwargs)
-        self._mu_table = None if mu_table is None else \
-            speed_table(mu_table, "mu_table", type(self).__name__)
+    table_keyword = "mu_table"
 
     def _mu(self, speed):
-        if self._mu_table is None:
+        if self._table is None:
             return self.mu
-        return table_value(speed / self.w_ref, self._mu_table)
+        return table_value(speed / self.w_ref, self._table)
 
     def equations(self):
         fn = ca.fmax(self.f_n, 0 * self.f_n)
@@ -176,7 +187,7 @@ def stribeck(speed, table, F_C, F_brk, w_S, b):
     return F_C + (F_brk - F_C) * g + b * speed
 
 
-class BearingFriction(PartialFriction):
+class BearingFriction(SpeedTableOption, PartialFriction):
     """Bearing friction with a true stuck mode between a shaft (A) and its support (B).
 
     Kinetic torque (Stribeck, Coulomb and viscous parts) for ``w = A.w - B.w``::
@@ -193,11 +204,6 @@ class BearingFriction(PartialFriction):
     T_C = Parameter("N*m", default=0.015, min=0, doc="Coulomb friction torque")
     w_S = Parameter("rad/s", default=0.1, min=0, doc="Stribeck speed")
     b = Parameter("N*m*s/rad", default=0.0, min=0, doc="Viscous friction coefficient")
-
-    def __init__(self, stribeck_table=None, **kwargs):
-        super().__init__(**kwargs)
-        self._table = None if stribeck_table is None else \
-            speed_table(stribeck_table, "stribeck_table", type(self).__name__)
 
     def equations(self):
         kinetic = stribeck(ca.fabs(self.w), self._table, self.T_C, self.T_brk, self.w_S,

@@ -12,7 +12,7 @@ import casadi as ca
 
 from mechatron.core import (Component, Discrete, Input, Parameter, Variable, der, if_else,
                             logic_and, pre, reinit, when)
-from mechatron.library.rotational.friction import speed_table, stribeck, table_value
+from mechatron.library.rotational.friction import SpeedTableOption, stribeck, table_value
 from mechatron.library.rotational.stickslip import initial_mode, stick_slip
 from mechatron.library.translational.interfaces import Flange, TwoFlange
 
@@ -42,7 +42,7 @@ class PartialFriction(TwoFlange, partial=True):
         return [initial_mode(self.mode, self.v)]
 
 
-class SupportFriction(PartialFriction):
+class SupportFriction(SpeedTableOption, PartialFriction):
     """Friction with a true stuck mode between a body (A) and its support (B).
 
     Kinetic force (Stribeck, Coulomb and viscous parts) for ``v = A.v - B.v``::
@@ -60,11 +60,6 @@ class SupportFriction(PartialFriction):
     v_S = Parameter("m/s", default=0.1, min=0, doc="Stribeck velocity")
     b = Parameter("N*s/m", default=0.0, min=0, doc="Viscous friction coefficient")
 
-    def __init__(self, stribeck_table=None, **kwargs):
-        super().__init__(**kwargs)
-        self._table = None if stribeck_table is None else \
-            speed_table(stribeck_table, "stribeck_table", type(self).__name__)
-
     def equations(self):
         kinetic = stribeck(ca.fabs(self.v), self._table, self.F_C, self.F_brk, self.v_S,
                            self.b)
@@ -73,7 +68,7 @@ class SupportFriction(PartialFriction):
                           kinetic, -kinetic, static, static)
 
 
-class Brake(PartialFriction):
+class Brake(SpeedTableOption, PartialFriction):
     """Translational brake with a true stuck mode, pressed by the normal force ``f_n``:
     the moving part at A, the housing at B.
 
@@ -93,15 +88,12 @@ class Brake(PartialFriction):
                      doc="Static friction coefficient / kinetic one at zero speed")
     v_ref = Parameter("m/s", default=1.0, min=0, doc="Unit of the speed column of mu_table")
 
-    def __init__(self, mu_table=None, **kwargs):
-        super().__init__(**kwargs)
-        self._mu_table = None if mu_table is None else \
-            speed_table(mu_table, "mu_table", type(self).__name__)
+    table_keyword = "mu_table"
 
     def _mu(self, speed):
-        if self._mu_table is None:
+        if self._table is None:
             return self.mu
-        return table_value(speed / self.v_ref, self._mu_table)
+        return table_value(speed / self.v_ref, self._table)
 
     def equations(self):
         fn = ca.fmax(self.f_n, 0 * self.f_n)
@@ -111,7 +103,7 @@ class Brake(PartialFriction):
                           kinetic, -kinetic, static, static)
 
 
-class MassWithStopAndFriction(Component):
+class MassWithStopAndFriction(SpeedTableOption, Component):
     """Sliding mass with Stribeck friction against the ground and end stops
     (Modelica's ``MassWithStopAndFriction``), with a true stuck mode.
 
@@ -152,11 +144,6 @@ class MassWithStopAndFriction(Component):
     stop = Discrete("1", start=0, kind="integer",
                     doc="1 resting at the upper stop, -1 at the lower one, 0 neither")
     impacts = Discrete("1", start=0, kind="integer", doc="Number of impacts on the stops")
-
-    def __init__(self, stribeck_table=None, **kwargs):
-        super().__init__(**kwargs)
-        self._table = None if stribeck_table is None else \
-            speed_table(stribeck_table, "stribeck_table", type(self).__name__)
 
     def equations(self):
         kinetic = stribeck(ca.fabs(self.v), self._table, self.F_C, self.F_brk, self.v_S,
