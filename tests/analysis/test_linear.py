@@ -110,3 +110,17 @@ def test_the_command_line_prints_the_matrices_and_draws_a_bode_plot(tmp_path):
     assert doc["operating_point"]["inputs"]["source.V"] == pytest.approx(
         100.0 * (R * B + K * K) / K, rel=1e-9)
     assert out.stat().st_size > 10_000
+
+
+def test_linearizing_a_hybrid_model_at_a_time_is_refused_not_guessed():
+    class Switched(mt.Component):
+        x = mt.Variable("1", start=0.0, doc="Rises, then holds")
+
+        def equations(self):
+            return [mt.der(self.x) == mt.if_else(self.x < 1.0, 1.0, 0.0)]
+
+    with pytest.raises(SimulationError, match=r"linearizing at a time needs the event "
+                                              r"modes"):
+        mt.linearize(Switched(), at=2.0)
+    A, *_ = mt.analysis.linear_matrices(Switched(), at={"x": 0.5})
+    assert A.shape == (1, 1)

@@ -75,6 +75,12 @@ def operating_point(model, at=None, *, params: dict | None = None,
     X, z, _ = initialize(cm, p, t0)
     t = t0
     if isinstance(at, (int, float)) and not isinstance(at, bool):
+        if cm.nr:
+            # a simlog holds the states, not the event modes reached at that time
+            raise SimulationError(f"model '{cm.name}': linearizing at a time needs the "
+                                  "event modes reached then, which a simulation log does "
+                                  "not keep; pass the state values as a dict instead.",
+                                  path=cm.name)
         from mechatron.solvers.simulate import simulate
         res = simulate(cm, float(at), params=params, t0=t0)
         t = float(at)
@@ -141,7 +147,7 @@ def linear_matrices(model, at=None, *, inputs=(), outputs=None, params=None):
     X = ca.vertcat(x, ca.DM(op.x[nx:])) if op.x.size > nx else x
     f = cm.f_ode(op.t, X, z, p)[:nx]
     g = cm.f_alg(op.t, X, z, p) if nz else ca.MX(0, 1)
-    h = ca.vertcat(*[cm.f_out(op.t, X, z, p)[k] for k in y_idx]) if y_idx else ca.MX(0, 1)
+    h = cm.f_out(op.t, X, z, p)[y_idx] if y_idx else ca.MX(0, 1)     # one call
     parts = [ca.jacobian(e, v) for e in (f, g, h) for v in (x, z, u)]
     J = ca.Function("linearization", [x, z, u], parts)
     vals = J(op.x[:nx], op.z, op.p[u_idx] if u_idx else np.zeros(0))
@@ -245,7 +251,7 @@ def trim(model, *, targets: dict | None = None, free=(), params: dict | None = N
         p[k] = u[j]
     X = ca.vertcat(x, ca.DM(op.x[nx:])) if op.x.size > nx else x
     target = ca.DM([float(v) for v in targets.values()])
-    y = ca.vertcat(*[cm.f_out(t, X, z, p)[k] for k in y_idx]) if y_idx else ca.MX(0, 1)
+    y = cm.f_out(t, X, z, p)[y_idx] if y_idx else ca.MX(0, 1)          # one call
     r = ca.vertcat(cm.f_ode(t, X, z, p)[:nx], cm.f_alg(t, X, z, p) if nz else ca.MX(0, 1),
                    y - target)
     w = ca.vertcat(x, z, u)

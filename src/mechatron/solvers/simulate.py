@@ -282,7 +282,9 @@ def _not_finite(cm: CompiledModel, t, Y, Xf, p) -> None:
         row = {n: i for i, n in enumerate(cm.names)}
         xi = [row.get(n) for n in cm.state_names]
         zi = [row.get(n) for n in cm.alg_names]
-        if None not in xi and None not in zi:
+        # the replay needs the event modes at that point: known for a model without
+        # relations, or at the last point (the final modes)
+        if None not in xi and None not in zi and (not cm.nr or k == Y.shape[1] - 1):
             def point(j):
                 X = np.concatenate([Y[xi, j], np.asarray(Xf, dtype=float)[cm.nx:]])
                 return [t[j], X, Y[zi, j], p]
