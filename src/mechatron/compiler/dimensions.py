@@ -348,8 +348,7 @@ class _Symbols:
 
     def __init__(self, flat):
         ctx = flat.context
-        physical = {v.owner for v in flat.variables.values()
-                    if v.kind == "across" or v.kind == "through"}
+        physical = flat.physical_owners
         syms, dims = [], []
         self.declared: dict[int, str] = {}
         by_name: dict[str, object] = {}

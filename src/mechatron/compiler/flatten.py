@@ -102,6 +102,12 @@ class FlatModel:
     def time(self) -> ca.SX:
         return self.context.time
 
+    @functools.cached_property
+    def physical_owners(self) -> frozenset:
+        """Paths of the components that have physical (conserving) ports."""
+        return frozenset(v.owner for v in self.variables.values()
+                         if v.kind == "across" or v.kind == "through")
+
 
 def _walk(root: Element):
     """Every element, parents first; each one's path is cached for the build."""

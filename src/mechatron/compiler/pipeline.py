@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import time as _time
+from collections.abc import Mapping
 
 import casadi as ca
 import numpy as np
@@ -130,9 +131,8 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
                 declared={n: i for i, n in enumerate(flat.variables)},
-                roles=_port_roles(flat, alias), classes=dict(flat.components),
-                physical={v.owner for v in flat.variables.values()
-                          if v.kind in ("across", "through")})
+                roles=_OnDemand(lambda: _port_roles(flat, alias)),
+                classes=dict(flat.components), physical=flat.physical_owners)
     lap("structure")
 
     # every logged variable as an expression of the unknowns
@@ -318,6 +318,30 @@ def _state_preference(flat, alias) -> dict[str, float]:
         if prio == "high":
             pref[rep] = pref.get(rep, 0.0) + 0.5
     return {n: v for n, v in pref.items() if v}
+
+
+class _OnDemand(Mapping):
+    """A mapping built on first read: for data that only error messages need."""
+
+    def __init__(self, build):
+        self._build, self._data = build, None
+
+    def _get(self) -> dict:
+        if self._data is None:
+            self._data = self._build()
+        return self._data
+
+    def __getitem__(self, key):
+        return self._get()[key]
+
+    def __iter__(self):
+        return iter(self._get())
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+    def __bool__(self) -> bool:     # present, whatever it will hold: not built to test
+        return True
 
 
 def _port_roles(flat, alias) -> dict[str, tuple[str, str, str, bool]]:
