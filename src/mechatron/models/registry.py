@@ -17,7 +17,7 @@ BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum"
                    "motor_heating", "quarter_car", "ball_screw", "kinetic_mechanism", "dc_motor_pwm",
                    "solenoid", "hydraulic_cylinder",
                    "buck_converter", "hbridge_filter", "stepper",
-                   "bldc", "servo_encoder", "geared_drive", "two_axis", "dc_motor_control",
+                   "bldc", "servo_encoder", "geared_drive", "two_axis", "dc_motor_control", "emps",
                    "planetary_hoist")
 
 _REGISTRY: dict[str, ModelEntry] = {}
