@@ -129,12 +129,13 @@ def test_native_code_gives_the_same_numbers(cm, tmp_path, monkeypatch):
     np.testing.assert_allclose(yb, ya, rtol=1e-10, atol=1e-12 * np.abs(ya).max())
 
 
-def test_models_with_events_are_refused():
+def test_state_events_are_refused_without_the_smooth_approximation():
     class Clamp(mt.Component):
         x = mt.Variable("1", start=0.0)
 
         def equations(self):
             return [mt.der(self.x) == mt.if_else(self.x < 1, 1.0, 0.0)]
     cm = mt.compile_model(Clamp())
-    with pytest.raises(ModelError, match="needs a smooth ODE model"):
+    with pytest.raises(ModelError, match=r"switch with the continuous states \(Clamp: x < 1\)"
+                                         r".*smooth approximation"):
         Trajectory(cm, np.arange(3.0), [], [0])

@@ -32,9 +32,36 @@ model outputs at the sample times of an experiment, as a function of the paramet
 * One sample step is mapped over the experiment with ``mapaccum`` (a native loop) and the
   outputs are evaluated on every sample with ``map``. No Python runs per step.
 
-Limitations: models with event relations (``if_else`` on states, modes) or algebraic loops
-left to a DAE solver are refused with a :class:`~mechatron.errors.ModelError`; write
-friction and saturations smoothly (``tanh``, the library's ``RotationalFriction``).
+Events
+------
+A model with events (``mt.sample`` clocks, discrete states, ``mt.when``, relations) is
+integrated as the fixed-step solvers do it, with Radau substeps: the modes, event
+counters and event times ride along with the states, the continuous dynamics read the
+modes, and at the end of every substep the compiled event iteration
+(``CompiledModel.f_events``) fires the clocks that are due and the conditions that became
+true, applies their actions and re-reads the relations. At a sample instant the actions
+read the input's new sample. The sensitivities pass through each event by the chain rule,
+``S+ = dg/dx S- + dg/dp D`` with ``g`` the event map (CasADi AD through the iteration,
+saturations included).
+
+* **Time events** (clock ticks, relations of time, discrete states, inputs held by a
+  zero-order hold) are exact, value and sensitivity, when their instants are substep ends:
+  a clock whose ticks are sample times, or fall on the substep grid, is checked
+  (:meth:`Trajectory.check_ticks`; a tick between substeps is an error, not a late
+  update). At a fixed event time ``dg/dtheta`` is the whole sensitivity jump.
+* **State events** (a relation whose distance moves with the continuous states, such as
+  ``sign(v)`` or a ``Saturation`` block on a state; with ``hold="linear"`` also one on an
+  input) would be found one substep late, with a sensitivity that misses the jump of the
+  event time. They are refused unless the user switches on the smooth approximation
+  ``smooth=w``: in the continuous dynamics the mode ``s`` of every such relation is
+  replaced by ``tanh(d / w)`` (``d`` the relation's distance, in its own unit; a relation
+  ``a < b`` then has the value ``(1 + tanh((b - a) / w)) / 2``). The approximation differs
+  from the switched model by the width ``w``; choose it small against the signal's range
+  and check the substeps resolve it (they are chosen from the stiffness it adds).
+
+Limitations: algebraic loops left to a DAE solver are refused with a
+:class:`~mechatron.errors.ModelError`; a clock period that is itself estimated is not
+supported (its ticks would move with the parameter).
 """
 
 from __future__ import annotations
@@ -61,13 +88,69 @@ _C = ((4 - _S6) / 10, (4 + _S6) / 10, 1.0)
 
 
 def check_model(cm: CompiledModel, what: str = "estimation") -> None:
-    """Refuse models this module cannot differentiate through."""
-    if cm.nr or cm.nz:
+    """Refuse models this module cannot differentiate through (algebraic loops)."""
+    if cm.nz:
         raise ModelError(
-            f"model '{cm.name}': {cm.nr} event relation(s) and {cm.nz} algebraic "
-            f"unknown(s); {what} needs a smooth ODE model (no if_else on variables, no "
-            f"algebraic loops). Write friction and limits smoothly (tanh, "
-            f"RotationalFriction) or use a model variant without events.", path=cm.name)
+            f"model '{cm.name}': {cm.nz} algebraic unknown(s) left to a DAE solver "
+            f"({', '.join(cm.alg_names[:4])}); {what} needs an ODE model. Make the "
+            f"nonlinear loop explicit (a state, or a small lag) or solve it by hand.",
+            path=cm.name)
+
+
+def _dist_symbols(cm: CompiledModel):
+    key = "est_dist"
+    if key not in cm._cache:
+        t = ca.SX.sym("t")
+        X = ca.SX.sym("X", cm.nX)
+        p = ca.SX.sym("p", cm.p0.size)
+        d = cm.f_dist(t, X, ca.SX(0, 1), p)[0] if cm.nr else ca.SX(0, 1)
+        cm._cache[key] = (t, X, p, d)
+    return cm._cache[key]
+
+
+def discrete_states(cm: CompiledModel) -> list[int]:
+    """Indices of the states that only events change (a zero derivative)."""
+    key = "est_discrete"
+    if key not in cm._cache:
+        X = ca.SX.sym("X", cm.nX)
+        f = cm.f_ode(ca.SX.sym("t"), X, ca.SX(0, 1), ca.SX.sym("p", cm.p0.size))
+        cm._cache[key] = [i for i in range(cm.nx) if ca.SX(f[i]).is_zero()]
+    return cm._cache[key]
+
+
+def state_event_relations(cm: CompiledModel, input_index=(), hold: str = "zoh") -> list[int]:
+    """Indices of the relations whose distance moves between events: it depends on a
+    continuous state, or (``hold="linear"``) on an input. Clocks, when memories and
+    relations of time, parameters, discrete states and held inputs are time events."""
+    if not cm.nr:
+        return []
+    t, X, p, d = _dist_symbols(cm)
+    disc = set(discrete_states(cm))
+    moving = [X[i] for i in range(cm.nx) if i not in disc]
+    if hold == "linear":
+        moving += [p[i] for i in input_index]
+    out = []
+    for k, (_owner, op) in enumerate(cm.relations):
+        if op in ("<", "<=", "sign") and moving and ca.depends_on(d[k], ca.vertcat(*moving)):
+            out.append(k)
+    return out
+
+
+def clocks(cm: CompiledModel, p) -> list[tuple[int, float, float]]:
+    """``(relation index, period, offset)`` of every clock at the parameter values ``p``
+    (read from the clock's distance ``t - (offset + c period)`` at ``c = 0`` and 1)."""
+    out = []
+    ks = [k for k, (_o, op) in enumerate(cm.relations) if op == "clock"]
+    if not ks:
+        return out
+    nx, nr = cm.nx, cm.nr
+    X = np.zeros(cm.nX)
+    d0 = np.array(cm.f_dist(0.0, X, np.zeros(0), p)[0], dtype=float).ravel()
+    X[nx + nr:nx + 2 * nr] = 1.0
+    d1 = np.array(cm.f_dist(0.0, X, np.zeros(0), p)[0], dtype=float).ravel()
+    for k in ks:
+        out.append((k, float(d0[k] - d1[k]), float(-d0[k])))
+    return out
 
 
 def fastest_time_constant(cm: CompiledModel, p: np.ndarray, x: np.ndarray,
@@ -85,7 +168,9 @@ def fastest_time_constant(cm: CompiledModel, p: np.ndarray, x: np.ndarray,
     if jf is None:
         xs = ca.SX.sym("x", cm.nx)
         ps = ca.SX.sym("p", cm.p0.size)
-        f = cm.f_ode(0.0, xs, ca.SX(0, 1), ps)
+        # modes +1, counters and event times 0 (the continuous dynamics between events)
+        rest = ca.vertcat(ca.DM.ones(cm.nr), ca.DM.zeros(2 * cm.nr))
+        f = cm.f_ode(0.0, ca.vertcat(xs, rest), ca.SX(0, 1), ps)[:cm.nx]
         jf = cm._cache[key] = ca.Function("state_jacobian", [xs, ps], [ca.jacobian(f, xs)])
     X = np.asarray(x, dtype=float).reshape(cm.nx, -1)
     taus = []
@@ -142,8 +227,12 @@ class Trajectory:
     jit : bool
         Compile the per-sample step functions to native code
         (:func:`~mechatron.estimation.native.native`; cached on disk).
+    smooth : float or None
+        Width of the smooth approximation of state events (see the module docstring);
+        None refuses models with state events.
 
-    ``function(p, x0, U) -> (Y, X)``: outputs ``(n_out, N)`` and states ``(nx, N)``.
+    ``function(p, x0, U) -> (Y, X)``: outputs ``(n_out, N)`` and continuous states
+    ``(nx, N)``; ``x0`` is the state before the events of the initial time.
     """
 
     cm: CompiledModel
@@ -154,23 +243,57 @@ class Trajectory:
     hold: str = "zoh"
     newton_tol: float = 1e-12
     jit: bool = False
+    smooth: float | None = None
 
     def __post_init__(self):
         check_model(self.cm)
         if self.hold not in ("zoh", "linear"):
             raise DataError(f"input hold must be 'zoh' or 'linear', got {self.hold!r}.")
+        if self.smooth is not None and not (isinstance(self.smooth, (int, float))
+                                            and math.isfinite(self.smooth)
+                                            and self.smooth > 0):
+            raise DataError(f"model '{self.cm.name}': the width of the smooth event "
+                            f"approximation must be a number > 0, got {self.smooth!r}.")
         self.t = np.asarray(self.t, dtype=float)
         self._sens = {}
+        cm = self.cm
+        self.events = bool(cm.nr) and cm.f_events is not None
+        self.smoothed = state_event_relations(cm, self.input_index, self.hold)
+        if self.smoothed and self.smooth is None:
+            labels = cm.report.get("relation_labels") or [op for _, op in cm.relations]
+            shown = "; ".join(f"{cm.relations[k][0] or cm.name}: {labels[k]}"
+                              for k in self.smoothed[:4])
+            raise ModelError(
+                f"model '{cm.name}': {len(self.smoothed)} relation(s) switch with the "
+                f"continuous states ({shown}): state events, which a sampled estimation "
+                f"would place up to a substep late, with wrong sensitivities. Switch on "
+                f"their smooth approximation (smooth = w: tanh(distance / w) for the "
+                f"mode; [options] smooth in a problem file), or write the law smoothly "
+                f"(tanh, the library's friction elements).", path=cm.name)
         self._symbols()
         self.function = self._build()
 
     # ------------------------------------------------------------------------------------
+    def _rest0(self) -> np.ndarray:
+        """Modes, counters and event times before the initial events: ordinary relations
+        +1 (re-read by the event iteration), clocks and when memories -1 (so a condition
+        that holds at the start rises), ``initial()`` true, ``terminal()`` false."""
+        cm = self.cm
+        nr = cm.nr
+        modes = np.ones(nr)
+        for k, (_o, op) in enumerate(cm.relations):
+            if op in ("clock", "mem", "terminal"):
+                modes[k] = -1.0
+        modes[list(cm.report.get("when_relations", []))] = -1.0
+        return np.concatenate([modes, np.zeros(nr), np.full(nr, float(self.t[0]))])
+
     def _symbols(self) -> None:
         """The stage residual of one substep and its rootfinder."""
         cm = self.cm
-        nx, npar, nu = cm.nx, cm.p0.size, len(self.input_index)
+        nx, npar, nu, nr = cm.nx, cm.p0.size, len(self.input_index), cm.nr
         ns = len(_C)
         self._x = ca.SX.sym("x", nx)
+        self._r = ca.SX.sym("r", 3 * nr if self.events else 0)
         self._p = ca.SX.sym("p", npar)
         self._u0 = ca.SX.sym("u0", nu)
         self._u1 = ca.SX.sym("u1", nu)
@@ -182,8 +305,8 @@ class Trajectory:
         fs = []
         for i in range(ns):
             frac = self._fa + _C[i] * self._h_frac_sym()
-            fs.append(cm.f_ode(self._ts + _C[i] * self._h, K[i * nx:(i + 1) * nx],
-                               ca.SX(0, 1), self._with_u(self._u_at(frac)))[:nx])
+            ti = self._ts + _C[i] * self._h
+            fs.append(self._rhs(ti, K[i * nx:(i + 1) * nx], self._with_u(self._u_at(frac))))
         for i in range(ns):
             acc = 0
             for j in range(ns):
@@ -191,7 +314,7 @@ class Trajectory:
             res.append(K[i * nx:(i + 1) * nx] - self._x - self._h * acc)
         self._K = K
         self._res = ca.vertcat(*res)
-        args = [self._x, self._p, self._u0, self._u1, self._h, self._ts, self._fa,
+        args = [self._x, self._r, self._p, self._u0, self._u1, self._h, self._ts, self._fa,
                 self._hf]
         g = ca.Function("radau_residual", [K, ca.vertcat(*args)], [self._res])
         self._newton = ca.Function("radau_correction", [K, ca.vertcat(*args)],
@@ -200,6 +323,41 @@ class Trajectory:
                                     {"abstol": self.newton_tol, "max_iter": 30,
                                      "error_on_fail": False})
         self._args = args
+        if self.events:
+            self._event_fn = self._event_function()
+
+    def _full(self, x, r):
+        """The integration state ``X = [x; modes; counters; event times]``."""
+        if self.events:
+            return ca.vertcat(x, r)
+        return ca.vertcat(x, ca.DM.zeros(3 * self.cm.nr)) if self.cm.nr else x
+
+    def _rhs(self, t, x, p):
+        """``dx/dt`` between events, with the smoothed modes of state events."""
+        cm = self.cm
+        X = self._full(x, self._r)
+        if self.smoothed:
+            tt, XX, pp, d = _dist_symbols(cm)
+            dk = ca.substitute(ca.vertcat(*[d[k] for k in self.smoothed]),
+                               ca.vertcat(tt, XX, pp), ca.vertcat(t, X, p))
+            parts = list(ca.vertsplit(X))
+            for j, k in enumerate(self.smoothed):
+                parts[cm.nx + k] = ca.tanh(dk[j] / self.smooth)
+            X = ca.vertcat(*parts)
+        return cm.f_ode(t, X, ca.SX(0, 1), p)[:cm.nx]
+
+    def _event_function(self) -> ca.Function:
+        """``(x, r, p, u, t) -> (x+, r+, dx+/dx, dx+/dp)``: the events found at ``t``
+        (input value ``u``) and the Jacobians of the new continuous state."""
+        cm = self.cm
+        u = ca.SX.sym("u", len(self.input_index))
+        t = ca.SX.sym("t")
+        pu = self._with_u(u)
+        Xn = cm.f_events(t, ca.vertcat(self._x, self._r), ca.SX(0, 1), pu)
+        xn = Xn[:cm.nx]
+        return ca.Function("sample_events", [self._x, self._r, self._p, u, t],
+                           [xn, Xn[cm.nx:], ca.jacobian(xn, self._x),
+                            ca.jacobian(xn, self._p)])
 
     def _substep(self, xi, args):
         """One Radau substep from ``xi``: the new state and, per state, the scaled
@@ -235,49 +393,129 @@ class Trajectory:
             return self._u0
         return self._u0 + frac * (self._u1 - self._u0)
 
+    def _u_end(self, j: int, m: int):
+        """The input at the end of substep ``j`` of ``m``, as the events there read it:
+        the next sample at the last one (the hold switches at the sample instant)."""
+        if j == m - 1 or self.hold == "linear":
+            return self._u0 + (j + 1) / m * (self._u1 - self._u0) if j < m - 1 \
+                else self._u1
+        return self._u0
+
     def _outputs_sx(self):
         cm = self.cm
         tt = ca.SX.sym("t")
-        y = cm.f_out(tt, self._x, ca.SX(0, 1), self._with_u(self._u0))
+        y = cm.f_out(tt, self._full(self._x, self._r), ca.SX(0, 1), self._with_u(self._u0))
         yo = ca.vertcat(*[y[i] for i in self.output_index]) if self.output_index \
             else ca.SX(0, 1)
         return tt, yo
 
+    def _sample(self, sens: bool, S=None, Dm=None):
+        """The symbolic sample step from ``(x, r[, S])``: ``m`` Radau substeps, each
+        followed by the events at its end."""
+        cm = self.cm
+        nx = cm.nx
+        m = int(self.substeps)
+        x, r, p, u0, u1 = self._x, self._r, self._p, self._u0, self._u1
+        h = ca.SX.sym("h_sample")
+        tk = ca.SX.sym("tk")
+        if sens:
+            GK = ca.jacobian(self._res, self._K)
+            Gx = ca.jacobian(self._res, x)
+            Gp = ca.jacobian(self._res, p)
+            Ss = ca.SX.sym("S", nx, S.size2())
+            dK = -ca.solve(GK, ca.mtimes(Gx, Ss) + ca.mtimes(Gp, Dm))
+            sub = ca.Function("radau_sensitivity", [self._K, Ss, ca.vertcat(*self._args)],
+                              [dK[-nx:, :]])
+        xi, ri, Si = x, r, S
+        e = ca.DM.zeros(nx, 1)
+        for j in range(m):
+            args = ca.vertcat(xi, ri, p, u0, u1, h / m, tk + j * h / m, j / m, 1 / m)
+            K, ej = self._substep(xi, args)
+            if sens:
+                Si = sub(K, Si, args)
+            xi = K[-nx:]
+            e = ca.fmax(e, ej)
+            if self.events:
+                t_end = tk + h if j == m - 1 else tk + (j + 1) * h / m
+                xi, ri, jx, jp = self._event_fn(xi, ri, p, self._u_end(j, m), t_end)
+                if sens:
+                    Si = ca.mtimes(jx, Si) + ca.mtimes(jp, Dm)
+        return h, tk, xi, ri, Si, e
+
+    def _initial(self, x0, P, U0, S0=None, D=None):
+        """The state after the events of the initial time (and its sensitivity)."""
+        if not self.events:
+            return x0, ca.MX(0, 1), S0
+        r0 = ca.DM(self._rest0())
+        xn, rn, jx, jp = self._event_fn(x0, r0, P, U0, float(self.t[0]))
+        Sn = None if S0 is None else ca.mtimes(jx, S0) + ca.mtimes(jp, ca.DM(D))
+        return xn, rn, Sn
+
     def _build(self) -> ca.Function:
         cm = self.cm
         nx, npar, nu = cm.nx, cm.p0.size, len(self.input_index)
-        m = int(self.substeps)
-        x, p, u0, u1 = self._x, self._p, self._u0, self._u1
-        h = ca.SX.sym("h_sample")
-        tk = ca.SX.sym("tk")
-        xi = x
-        e = ca.DM.zeros(nx, 1)
-        for j in range(m):
-            K, ej = self._substep(xi, ca.vertcat(xi, p, u0, u1, h / m, tk + j * h / m,
-                                                 j / m, 1 / m))
-            xi = K[-nx:]
-            e = ca.fmax(e, ej)
-        step = ca.Function("sample_step", [x, ca.vertcat(p, u0, u1, h, tk)], [xi, e])
+        nr3 = self._r.numel()
+        x, r, p, u0, u1 = self._x, self._r, self._p, self._u0, self._u1
+        h, tk, xi, ri, _, e = self._sample(False)
+        step = ca.Function("sample_step", [ca.vertcat(x, r), ca.vertcat(p, u0, u1, h, tk)],
+                           [ca.vertcat(xi, ri), e])
         if self.jit:
             step = native(step)
         N = self.t.size
         x0 = ca.MX.sym("x0", nx)
         P = ca.MX.sym("p", npar)
         U = ca.MX.sym("U", nu, N)
+        xs0, rs0, _ = self._initial(x0, P, U[:, 0])
+        xa0 = ca.vertcat(xs0, rs0)
         if N > 1:
-            Xr, E = step.mapaccum("run", N - 1)(x0, self._run_args(P, U))
-            Xs = ca.horzcat(x0, Xr)
+            Xr, E = step.mapaccum("run", N - 1)(xa0, self._run_args(P, U))
+            Xs = ca.horzcat(xa0, Xr)
         else:
-            Xs, E = x0, ca.MX(nx, 0)
+            Xs, E = xa0, ca.MX(nx, 0)
         tt, yo = self._outputs_sx()
-        out = ca.Function("outputs", [tt, x, p, u0], [yo])
+        out = ca.Function("outputs", [tt, ca.vertcat(x, r), p, u0], [yo])
         if self.jit:
             out = native(out)
         out = out.map(N)
         Y = out(ca.DM(self.t.reshape(1, -1)), Xs, ca.repmat(P, 1, N), U)
-        self._checked = ca.Function("trajectory_checked", [P, x0, U], [Y, Xs, E],
+        Xc = Xs[:nx, :] if nr3 else Xs
+        self._checked = ca.Function("trajectory_checked", [P, x0, U], [Y, Xc, E],
                                     ["p", "x0", "U"], ["Y", "X", "newton"])
-        return ca.Function("trajectory", [P, x0, U], [Y, Xs], ["p", "x0", "U"], ["Y", "X"])
+        return ca.Function("trajectory", [P, x0, U], [Y, Xc], ["p", "x0", "U"], ["Y", "X"])
+
+    def check_ticks(self, p) -> None:
+        """Raise if a clock of the model ticks between substep ends inside the
+        experiment (its update would come late): time events must fall on the grid."""
+        if not self.events:
+            return
+        m = int(self.substeps)
+        grid = (self.t[:-1, None] + np.diff(self.t)[:, None] * np.arange(m) / m).ravel()
+        grid = np.concatenate([grid, self.t[-1:]])
+        t0, t1 = float(self.t[0]), float(self.t[-1])
+        for k, period, offset in clocks(self.cm, np.asarray(p, dtype=float)):
+            if not period > 0:
+                continue
+            first = max(0, math.ceil((t0 - offset) / period - 1e-9))
+            last = math.floor((t1 - offset) / period + 1e-9)
+            if last < first:
+                continue
+            if last - first > 50 * grid.size:
+                bad = offset + (first + 0.5) * period
+            else:
+                ticks = offset + np.arange(first, last + 1) * period
+                j = np.clip(np.searchsorted(grid, ticks), 1, grid.size - 1)
+                dist = np.minimum(np.abs(grid[j] - ticks), np.abs(grid[j - 1] - ticks))
+                off = dist > 1e-9 * period + 1e-12 * max(abs(t1), 1.0)
+                if not off.any():
+                    continue
+                bad = ticks[np.argmax(off)]
+            owner = self.cm.relations[k][0] or self.cm.name
+            raise DataError(
+                f"{owner}: the clock (period {period:g} s, offset {offset:g} s) ticks at "
+                f"t = {bad:.9g} s, between the substeps of the sample grid ({m} per "
+                f"sample); its update would act late. Sample the data on the clock's "
+                f"ticks, or choose substeps that put every tick on a substep end.",
+                path=owner)
 
     def check_convergence(self, E) -> None:
         """Raise if a sample's Newton iteration did not converge. ``E`` (nx, N-1): per
@@ -318,31 +556,18 @@ class Trajectory:
             return self._sens[key]
         cm = self.cm
         nx, npar, nu = cm.nx, cm.p0.size, len(self.input_index)
+        nr3 = self._r.numel()
         q = D.shape[1]
-        m = int(self.substeps)
-        x, p, u0, u1 = self._x, self._p, self._u0, self._u1
+        x, r, p, u0 = self._x, self._r, self._p, self._u0
         Dm = ca.DM(D)
-        # implicit function theorem on the stage residual G(K, x, p) = 0
-        GK = ca.jacobian(self._res, self._K)
-        Gx = ca.jacobian(self._res, x)
-        Gp = ca.jacobian(self._res, p)
+        # implicit function theorem on the stage residual G(K, x, p) = 0, and the chain
+        # rule through the events at the substep ends
         S = ca.SX.sym("S", nx, q)
-        dK = -ca.solve(GK, ca.mtimes(Gx, S) + ca.mtimes(Gp, Dm))
-        sub = ca.Function("radau_sensitivity", [self._K, S, ca.vertcat(*self._args)],
-                          [dK[-nx:, :]])
-        h = ca.SX.sym("h_sample")
-        tk = ca.SX.sym("tk")
-        xi, Si = x, S
-        e = ca.DM.zeros(nx, 1)
-        for j in range(m):
-            args = ca.vertcat(xi, p, u0, u1, h / m, tk + j * h / m, j / m, 1 / m)
-            K, ej = self._substep(xi, args)
-            Si = sub(K, Si, args)
-            xi = K[-nx:]
-            e = ca.fmax(e, ej)
-        xa = ca.vertcat(x, ca.vec(S))
-        step = ca.Function("sample_step_sens", [xa, ca.vertcat(p, u0, u1, h, tk)],
-                           [ca.vertcat(xi, ca.vec(Si)), e])
+        h, tk, xi, ri, Si, e = self._sample(True, S, Dm)
+        xa = ca.vertcat(x, r, ca.vec(S))
+        step = ca.Function("sample_step_sens", [xa, ca.vertcat(p, self._u0, self._u1, h,
+                                                              tk)],
+                           [ca.vertcat(xi, ri, ca.vec(Si)), e])
         if self.jit:
             step = native(step)
         N = self.t.size
@@ -350,19 +575,22 @@ class Trajectory:
         S0 = ca.MX.sym("S0", nx, q)
         P = ca.MX.sym("p", npar)
         U = ca.MX.sym("U", nu, N)
-        xa0 = ca.vertcat(x0, ca.vec(S0))
+        xs0, rs0, Ss0 = self._initial(x0, P, U[:, 0], S0, D)
+        xa0 = ca.vertcat(xs0, rs0, ca.vec(Ss0))
         if N > 1:
             XR, E = step.mapaccum("run_sens", N - 1)(xa0, self._run_args(P, U))
             XA = ca.horzcat(xa0, XR)
         else:
             XA, E = xa0, ca.MX(nx, 0)
         tt, yo = self._outputs_sx()
+        X = self._full(x, r)
         dy = ca.mtimes(ca.jacobian(yo, x), S) + ca.mtimes(ca.jacobian(yo, p), Dm)
         out = ca.Function("outputs_sens", [tt, xa, p, u0], [yo, ca.vec(dy)])
         if self.jit:
             out = native(out)
         out = out.map(N)
         Y, dY = out(ca.DM(self.t.reshape(1, -1)), XA, ca.repmat(P, 1, N), U)
+        del X, nr3
         f = _Checked(ca.Function("trajectory_sens", [P, x0, U, S0], [Y, dY, E],
                                  ["p", "x0", "U", "S0"], ["Y", "dY", "newton"]), self)
         self._sens[key] = f

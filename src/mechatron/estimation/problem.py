@@ -99,7 +99,9 @@ class EstimationProblem:
     Parameters
     ----------
     model : Component or CompiledModel
-        A smooth ODE model (no event relations; see :mod:`.discretize`).
+        An ODE model, with or without events: sampled blocks, discrete states,
+        saturations and other time events are exact; state events need ``smooth``
+        (see :mod:`.discretize`).
     experiments : list of Experiment
     free : list of str, dict or FreeParameter
         Parameters to estimate (paths as in ``CompiledModel.param_names``).
@@ -121,11 +123,15 @@ class EstimationProblem:
         the starting values (at most ``max_substeps``).
     jit : bool or "auto"
         Compile the step functions to native code (see :mod:`.native`).
+    smooth : float or None
+        Width of the smooth approximation of state events (relations that switch with
+        the continuous states), ``tanh(distance / smooth)`` for their modes; None refuses
+        such models (see :mod:`.discretize`).
     """
 
     def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
                  offsets=(), free_x0=(), substeps=None, max_substeps: int = 400,
-                 step_ratio: float = 4.0, jit="auto"):
+                 step_ratio: float = 4.0, jit="auto", smooth=None):
         for m in (substeps if isinstance(substeps, (list, tuple)) else [substeps]):
             if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer))
                                   or m < 1):
@@ -144,9 +150,11 @@ class EstimationProblem:
         self.offsets = list(offsets)
         self.free_x0 = list(free_x0)
         self.jit = jit
+        self.smooth = smooth
         self._init = dict(inputs=self.inputs, outputs=self.outputs, fixed=self.fixed,
                           offsets=self.offsets, free_x0=self.free_x0,
-                          max_substeps=max_substeps, step_ratio=step_ratio, jit=jit)
+                          max_substeps=max_substeps, step_ratio=step_ratio, jit=jit,
+                          smooth=smooth)
         pindex = {n: i for i, n in enumerate(cm.param_names)}
         problems = []
         for f in self.free:
@@ -252,7 +260,13 @@ class EstimationProblem:
                     continue
             traj = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
                               [cm.names.index(self._outspec[lab][0]) for lab in out_labels],
-                              substeps=m, hold=e.hold, jit=self._use_jit(e.n * m))
+                              substeps=m, hold=e.hold, jit=self._use_jit(e.n * m),
+                              smooth=self.smooth)
+            try:
+                traj.check_ticks(pe)
+            except DataError as exc:
+                problems.append(f"{e.source}: experiment '{e.name}': {exc}")
+                continue
             self.bound.append(dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), p=pe, x0=x0,
                                    traj=traj, out_labels=out_labels, substeps=m))
         if problems:
@@ -280,7 +294,8 @@ class EstimationProblem:
             tr = b["traj"]
             if not tr.jit:
                 b["traj"] = Trajectory(self.cm, tr.t, tr.input_index, tr.output_index,
-                                       substeps=tr.substeps, hold=tr.hold, jit=True)
+                                       substeps=tr.substeps, hold=tr.hold, jit=True,
+                                       smooth=tr.smooth)
         self._init["jit"] = True
         return True
 
@@ -306,7 +321,7 @@ class EstimationProblem:
             p[pindex[self.inputs[lab]]] = U[j][np.argmax(np.abs(U[j]))] if U[j].size else 0
         # states along a coarse (one substep, L-stable) simulation at these values
         probe = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels], [],
-                           substeps=1, hold=e.hold)
+                           substeps=1, hold=e.hold, smooth=self.smooth)
         pp = pe.copy()
         for name, v in values.items():
             pp[pindex[name]] = v
@@ -328,7 +343,8 @@ class EstimationProblem:
                 tr = b["traj"]
                 b["traj"] = Trajectory(self.cm, tr.t, tr.input_index, tr.output_index,
                                        substeps=m, hold=tr.hold,
-                                       jit=self._use_jit(tr.t.size * m))
+                                       jit=self._use_jit(tr.t.size * m), smooth=tr.smooth)
+                b["traj"].check_ticks(b["p"])
                 b["substeps"] = m
                 changed = True
         if changed:
