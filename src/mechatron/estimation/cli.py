@@ -104,6 +104,10 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         f"{e}: " + ", ".join(f"{lab} {v0:.3g} -> {v:.3g}"
                              for (lab, v), v0 in zip(d.items(), res.nrmse_initial[e].values()))
         for e, d in res.nrmse.items()))
+    for e, d in res.validation.items():
+        emit(f"  validation on {e} (not fitted): " + "; ".join(
+            f"{lab} RMSE {v['rmse']:.4g}, NRMSE {v['nrmse']:.3g}, relative error "
+            f"{v['relerr_pct']:.3g}%" for lab, v in d.items()))
     strong = [(res.names[a], res.names[b], res.correlation[a, b])
               for a in range(len(res.names)) for b in range(a)
               if abs(res.correlation[a, b]) > 0.9]

@@ -213,8 +213,11 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
         where = f"[[experiments]] {k}" + (f" ({exp['name']})" if isinstance(exp, dict)
                                           and isinstance(exp.get("name"), str) else "")
         if not c.keys(where, exp, ("name", "file", "time", "inputs", "outputs", "units",
-                                   "params", "x0", "hold", "sigma"), required=("file",)):
+                                   "params", "x0", "hold", "sigma", "fit"),
+                      required=("file",)):
             continue
+        if "fit" in exp and not isinstance(exp["fit"], bool):
+            c.add(f"{where} fit", f"expected true or false, got {_show(exp['fit'])}")
         for key in ("name", "file", "time"):
             if key in exp:
                 c.text(f"{where} {key}", exp[key])
@@ -255,9 +258,11 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
         c.values("[fixed]", cfg["fixed"])
 
     opts = cfg.get("options", {})
-    if c.keys("[options]", opts, ("substeps", "jit")):
+    if c.keys("[options]", opts, ("substeps", "jit", "smooth")):
         if "substeps" in opts:
             c.number("[options] substeps", opts["substeps"], integer=True, minimum=1)
+        if "smooth" in opts:
+            c.number("[options] smooth", opts["smooth"], positive=True)
         if "jit" in opts and opts["jit"] not in (True, False, "auto"):
             c.add("[options] jit", f"must be true, false or \"auto\", got {opts['jit']!r}")
 
@@ -382,12 +387,16 @@ def _value(raw, unit: str, where: str) -> float:
     return float(to_si(raw, unit, where))
 
 
-def _experiments(cfg: dict) -> list[Experiment]:
+def _experiments(cfg: dict, fit: bool = True) -> list[Experiment]:
+    """The experiments to fit (``fit`` true, the default of each) or, with ``fit=False``,
+    those marked ``fit = false``: simulated after the fit for validation only."""
     base = Path(cfg["_dir"])
     out = []
     for k, spec in enumerate(cfg.get("experiments", [])):
         if "file" not in spec:
             raise DataError(f"{cfg['_path']}: [[experiments]] number {k + 1} has no 'file'.")
+        if spec.get("fit", True) != fit:
+            continue
         path = base / spec["file"]
         exp = load_experiment(path, time=spec.get("time", "t"),
                               inputs=spec.get("inputs", []), outputs=spec.get("outputs", []),
@@ -396,8 +405,9 @@ def _experiments(cfg: dict) -> list[Experiment]:
                               x0=dict(spec.get("x0", {})), hold=spec.get("hold", "zoh"),
                               sigma=dict(spec.get("sigma", {})))
         out.append(exp)
-    if not out:
-        raise DataError(f"{cfg['_path']}: no [[experiments]]; give at least one data file.")
+    if not out and fit:
+        raise DataError(f"{cfg['_path']}: no [[experiments]] to fit; give at least one data "
+                        "file (without fit = false).")
     return out
 
 
@@ -460,7 +470,8 @@ def build_estimation(cfg: dict, *, model=None):
                              fixed=fixed, offsets=cfg.get("offsets", []),
                              free_x0=cfg.get("free_x0", []),
                              substeps=opts.get("substeps"),
-                             jit=opts.get("jit", "auto"))
+                             jit=opts.get("jit", "auto"), smooth=opts.get("smooth"),
+                             validation=_experiments(cfg, fit=False))
 
 
 def build_sensitivity(cfg: dict):

@@ -59,7 +59,8 @@ from mechatron.estimation.discretize import (Trajectory, check_model, choose_sub
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FreeParameter", "EstimationProblem", "EstimationResult", "estimate"]
+__all__ = ["FreeParameter", "EstimationProblem", "EstimationResult", "estimate",
+           "validation_errors"]
 
 #: Substeps per simulation from which ``jit="auto"`` compiles the step functions.
 JIT_STEPS = 4000
@@ -127,11 +128,14 @@ class EstimationProblem:
         Width of the smooth approximation of state events (relations that switch with
         the continuous states), ``tanh(distance / smooth)`` for their modes; None refuses
         such models (see :mod:`.discretize`).
+    validation : list of Experiment
+        Experiments not fitted: :func:`estimate` simulates them with the estimates and
+        reports their errors (``EstimationResult.validation``).
     """
 
     def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
                  offsets=(), free_x0=(), substeps=None, max_substeps: int = 400,
-                 step_ratio: float = 4.0, jit="auto", smooth=None):
+                 step_ratio: float = 4.0, jit="auto", smooth=None, validation=()):
         for m in (substeps if isinstance(substeps, (list, tuple)) else [substeps]):
             if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer))
                                   or m < 1):
@@ -151,6 +155,7 @@ class EstimationProblem:
         self.free_x0 = list(free_x0)
         self.jit = jit
         self.smooth = smooth
+        self.validation = list(validation)
         self._init = dict(inputs=self.inputs, outputs=self.outputs, fixed=self.fixed,
                           offsets=self.offsets, free_x0=self.free_x0,
                           max_substeps=max_substeps, step_ratio=step_ratio, jit=jit,
@@ -208,7 +213,10 @@ class EstimationProblem:
         self.bound = []
         problems = []
         for e in self.experiments:
-            missing = [lab for lab in self.inputs if lab not in e.inputs]
+            # an input the experiment lacks is allowed when it sets the parameter the
+            # input drives to a constant (params = { pulse = 0 }: no pulses in this run)
+            missing = [lab for lab in self.inputs
+                       if lab not in e.inputs and self.inputs[lab] not in e.params]
             if not any(lab in e.outputs for lab in self.outputs):
                 missing += list(self.outputs)
             if missing:
@@ -216,7 +224,7 @@ class EstimationProblem:
                                 f"{', '.join(missing)} (it has "
                                 f"{', '.join([*e.inputs, *e.outputs])}).")
                 continue
-            in_labels = list(self.inputs)
+            in_labels = [lab for lab in self.inputs if lab in e.inputs]
             out_labels = [lab for lab in self.outputs if lab in e.outputs]
             try:
                 fin = [unit_factor(e.units.get(lab, ""),
@@ -268,7 +276,8 @@ class EstimationProblem:
                 problems.append(f"{e.source}: experiment '{e.name}': {exc}")
                 continue
             self.bound.append(dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), p=pe, x0=x0,
-                                   traj=traj, out_labels=out_labels, substeps=m))
+                                   traj=traj, out_labels=out_labels, substeps=m,
+                                   in_labels=in_labels))
         if problems:
             raise DataError(" ".join(problems), problems=problems)
         self._build_residual()
@@ -304,7 +313,8 @@ class EstimationProblem:
         the same substeps): for process pools and Dask workers."""
         import copy
         return (_rebuild, (self.cm, self.experiments, copy.deepcopy(self.free),
-                           dict(self._init, substeps=[b["substeps"] for b in self.bound])))
+                           dict(self._init, substeps=[b["substeps"] for b in self.bound],
+                                validation=self.validation)))
 
     def _start_values(self) -> dict:
         return {f.name: f.initial for f in self.free}
@@ -337,7 +347,7 @@ class EstimationProblem:
         values = dict(zip([f.name for f in self.free], theta[:len(self.free)]))
         changed = False
         for b in self.bound:
-            m = self._substeps(b["exp"], b["p"], b["x0"], b["U"], list(self.inputs),
+            m = self._substeps(b["exp"], b["p"], b["x0"], b["U"], b["in_labels"],
                                values, ratio, max_substeps)
             if m > b["substeps"]:
                 tr = b["traj"]
@@ -504,6 +514,9 @@ class EstimationResult:
     success: bool
     message: str
     problem: EstimationProblem = field(repr=False, default=None)
+    #: Errors on the validation experiments (not fitted), per experiment and output:
+    #: ``{"rmse", "nrmse", "fit_pct", "relerr_pct"}`` (see :func:`validation_errors`).
+    validation: dict = field(default_factory=dict)
     #: Parameters that ended on a bound of ``min``/``max``: ``{name: {"side", "bound"}}``
     #: (see :func:`~mechatron.estimation.bounds.at_bounds`); their intervals assume an
     #: interior optimum and do not hold there.
@@ -523,6 +536,7 @@ class EstimationResult:
                                 "matrix": np.round(self.correlation, 6).tolist()},
                 "cost_initial": self.cost_initial, "cost": self.cost,
                 "nrmse": self.nrmse, "nrmse_initial": self.nrmse_initial,
+                "validation": self.validation,
                 "iterations": self.iterations, "evaluations": self.evaluations,
                 "wall_time_s": self.wall_time, "success": self.success,
                 "message": self.message,
@@ -591,6 +605,38 @@ def _parse_output(spec: str) -> tuple[str, str]:
     if spec.startswith("rate(") and spec.endswith(")"):
         return spec[5:-1].strip(), "rate"
     return spec, "value"
+
+
+def validation_errors(prob: EstimationProblem, theta, experiments=None) -> dict:
+    """Simulate ``experiments`` (default: ``prob.validation``) with the free parameters
+    and offsets at ``theta`` and compare with their measurements, per experiment and
+    output: ``rmse`` (model unit), ``nrmse`` (as the fit), ``fit_pct`` ``100 (1 -
+    nrmse)`` and ``relerr_pct`` ``100 ||ym - y|| / ||ym||``. Their own initial states
+    are used (``free_x0`` is not estimated for them)."""
+    experiments = prob.validation if experiments is None else list(experiments)
+    if not experiments:
+        return {}
+    theta = np.asarray(theta, dtype=float)
+    nf, no = len(prob.free), len(prob.offsets)
+    free = [FreeParameter(f.name, float(v), f.min, f.max, f.scale)
+            for f, v in zip(prob.free, theta[:nf])]
+    m = max(b["substeps"] for b in prob.bound)
+    other = EstimationProblem(prob.cm, experiments, free,
+                              **dict(prob._init, free_x0=(),
+                                     substeps=[m] * len(experiments)))
+    sims = other.simulate(np.concatenate([theta[:nf + no]]))
+    out = {}
+    for b, sim in zip(other.bound, sims):
+        d = {}
+        for k, lab in enumerate(b["out_labels"]):
+            ym, y = b["Ym"][k], sim[lab]
+            err = float(np.linalg.norm(ym - y))
+            nrmse = err / (np.linalg.norm(ym - ym.mean()) or 1.0)
+            d[lab] = {"rmse": err / np.sqrt(ym.size), "nrmse": nrmse,
+                      "fit_pct": 100 * (1 - nrmse),
+                      "relerr_pct": 100 * err / (np.linalg.norm(ym) or 1.0)}
+        out[b["exp"].name] = d
+    return out
 
 
 def _nrmse(prob: EstimationProblem, sims: list[dict]) -> dict:
@@ -733,4 +779,5 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
         nrmse=_nrmse(prob, prob.simulate(theta)),
         nrmse_initial=_nrmse(prob, prob.simulate(prob.initial)), history=history,
         iterations=len(history) - 1, evaluations=counts["sims"], wall_time=wall,
-        success=bool(success), message=message, problem=prob, at_bound=hits)
+        success=bool(success), message=message, problem=prob, at_bound=hits,
+        validation=validation_errors(prob, theta))
