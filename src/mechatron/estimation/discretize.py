@@ -73,6 +73,7 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
+from mechatron.compiler.relations import _is_unary
 from mechatron.errors import DataError, ModelError, SimulationError
 from mechatron.estimation.native import native
 from mechatron.solvers.fixed import NEWTON_ATOL, NEWTON_RTOL, NEWTON_STEP
@@ -119,9 +120,12 @@ def discrete_states(cm: CompiledModel) -> list[int]:
 
 
 def state_event_relations(cm: CompiledModel, input_index=(), hold: str = "zoh") -> list[int]:
-    """Indices of the relations whose distance moves between events: it depends on a
-    continuous state, or (``hold="linear"``) on an input. Clocks, when memories and
-    relations of time, parameters, discrete states and held inputs are time events."""
+    """Indices of the relations that are state events: the distance moves between
+    events (it depends on a continuous state, or with ``hold="linear"`` on an input) and
+    the mode acts on the dynamics or on another relation (a when condition, a nested
+    relation). Clocks, when memories, relations of time, parameters, discrete states and
+    held inputs are time events; a relation read only by the outputs is exact at the
+    samples (its mode is re-read at every substep end)."""
     if not cm.nr:
         return []
     t, X, p, d = _dist_symbols(cm)
@@ -129,11 +133,58 @@ def state_event_relations(cm: CompiledModel, input_index=(), hold: str = "zoh") 
     moving = [X[i] for i in range(cm.nx) if i not in disc]
     if hold == "linear":
         moving += [p[i] for i in input_index]
+    if not moving:
+        return []
+    f = cm.f_ode(t, X, ca.SX(0, 1), p)[:cm.nx]
     out = []
     for k, (_owner, op) in enumerate(cm.relations):
-        if op in ("<", "<=", "sign") and moving and ca.depends_on(d[k], ca.vertcat(*moving)):
+        mode = X[cm.nx + k]
+        acts = ca.depends_on(f, mode) or ca.depends_on(d, mode)
+        if op in ("<", "<=", "sign") and acts and ca.depends_on(d[k], ca.vertcat(*moving)):
             out.append(k)
     return out
+
+
+def _blended_ode(cm: CompiledModel) -> ca.Function:
+    """``f_ode`` with its logic made arithmetic: ``if_else(c, a, b)`` as
+    ``c a + (1 - c) b``, ``not c`` as ``1 - c``, ``and`` as a product, ``or`` as
+    ``a + b - a b``. Identical for conditions that are 0 or 1; with a relation's value
+    smoothed into (0, 1) the branches blend instead of one being picked."""
+    key = "est_blended"
+    if key not in cm._cache:
+        t = ca.SX.sym("t")
+        X = ca.SX.sym("X", cm.nX)
+        p = ca.SX.sym("p", cm.p0.size)
+        f = cm.f_ode(t, X, ca.SX(0, 1), p)[:cm.nx]
+        syms = [t, X, p]
+        g = ca.Function("scan", syms, [f])
+        work = {}
+        outs = [None] * cm.nx
+        for k in range(g.n_instructions()):
+            op = g.instruction_id(k)
+            o = g.instruction_output(k)
+            i = g.instruction_input(k)
+            if op == ca.OP_INPUT:
+                work[o[0]] = syms[i[0]][i[1]]
+            elif op == ca.OP_CONST:
+                work[o[0]] = ca.SX(g.instruction_constant(k))
+            elif op == ca.OP_OUTPUT:
+                outs[o[1]] = work[i[0]]
+            elif op == ca.OP_IF_ELSE_ZERO:
+                work[o[0]] = work[i[0]] * work[i[1]]
+            elif op == ca.OP_NOT:
+                work[o[0]] = 1 - work[i[0]]
+            elif op == ca.OP_AND:
+                work[o[0]] = work[i[0]] * work[i[1]]
+            elif op == ca.OP_OR:
+                work[o[0]] = work[i[0]] + work[i[1]] - work[i[0]] * work[i[1]]
+            elif _is_unary(op):
+                work[o[0]] = ca.SX.unary(op, work[i[0]])
+            else:
+                work[o[0]] = ca.SX.binary(op, work[i[0]], work[i[1]])
+        outs = [ca.SX(0) if e is None else e for e in outs]
+        cm._cache[key] = ca.Function("blended_ode", syms, [ca.vertcat(*outs)])
+    return cm._cache[key]
 
 
 def clocks(cm: CompiledModel, p) -> list[tuple[int, float, float]]:
@@ -336,15 +387,15 @@ class Trajectory:
         """``dx/dt`` between events, with the smoothed modes of state events."""
         cm = self.cm
         X = self._full(x, self._r)
-        if self.smoothed:
-            tt, XX, pp, d = _dist_symbols(cm)
-            dk = ca.substitute(ca.vertcat(*[d[k] for k in self.smoothed]),
-                               ca.vertcat(tt, XX, pp), ca.vertcat(t, X, p))
-            parts = list(ca.vertsplit(X))
-            for j, k in enumerate(self.smoothed):
-                parts[cm.nx + k] = ca.tanh(dk[j] / self.smooth)
-            X = ca.vertcat(*parts)
-        return cm.f_ode(t, X, ca.SX(0, 1), p)[:cm.nx]
+        if not self.smoothed:
+            return cm.f_ode(t, X, ca.SX(0, 1), p)[:cm.nx]
+        tt, XX, pp, d = _dist_symbols(cm)
+        dk = ca.substitute(ca.vertcat(*[d[k] for k in self.smoothed]),
+                           ca.vertcat(tt, XX, pp), ca.vertcat(t, X, p))
+        parts = list(ca.vertsplit(X))
+        for j, k in enumerate(self.smoothed):
+            parts[cm.nx + k] = ca.tanh(dk[j] / self.smooth)
+        return _blended_ode(cm)(t, ca.vertcat(*parts), p)
 
     def _event_function(self) -> ca.Function:
         """``(x, r, p, u, t) -> (x+, r+, dx+/dx, dx+/dp)``: the events found at ``t``
