@@ -25,6 +25,7 @@ from _common import dumps, environment, log
 import bench_codegen
 import bench_dc_motor
 import bench_dimensions
+import bench_emps
 import bench_estimation
 import bench_events
 import bench_explore
@@ -40,6 +41,7 @@ BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
               "pwm": bench_pwm.run, "scaling": bench_scaling.run,
               "codegen": bench_codegen.run, "realtime": bench_realtime.run,
               "multibody": bench_multibody.run, "estimation": bench_estimation.run,
+              "emps": bench_emps.run,
               "dimensions": bench_dimensions.run, "subsystems": bench_subsystems.run,
               "events": bench_events.run,
               "stiff_contact": bench_stiff_contact.run,
@@ -252,6 +254,20 @@ def _rows_estimation(r: dict) -> list[dict]:
                  mc["ratio_mechatron_over_scipy"])]
 
 
+def _rows_emps(r: dict) -> list[dict]:
+    mech, base = r["mechatron"], r["scipy_least_squares_fd"]
+    wall = mech["wall_s_second"]
+    return [_row(f"EMPS estimation, 4 parameters ({r['data']} data)", "s", wall,
+                 "SciPy least_squares, finite differences, same model", base["wall_s"],
+                 base["ratio_scipy_over_mechatron"], f"< {r['goal_s']:g} s (issue 19)",
+                 wall < r["goal_s"]),
+            _row("EMPS validation position RMS error", "um",
+                 1e6 * mech["validation_rmse_position_m"], "authors' parameters",
+                 1e6 * mech["reference_parameters_validation_rmse_position_m"],
+                 mech["reference_parameters_validation_rmse_position_m"]
+                 / mech["validation_rmse_position_m"])]
+
+
 def _rows_dimensions(r: dict) -> list[dict]:
     last = r["rows"][-1]
     share = last["share_of_compile"]["median"]
@@ -300,7 +316,8 @@ def _rows_explore(r: dict) -> list[dict]:
 TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_pwm,
               "scaling": _rows_scaling, "codegen": _rows_codegen,
               "realtime": _rows_realtime, "multibody": _rows_multibody,
-              "estimation": _rows_estimation, "dimensions": _rows_dimensions,
+              "estimation": _rows_estimation, "emps": _rows_emps,
+              "dimensions": _rows_dimensions,
               "subsystems": _rows_subsystems, "events": _rows_events,
               "stiff_contact": _rows_stiff_contact, "explore": _rows_explore}
 

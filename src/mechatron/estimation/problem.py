@@ -319,9 +319,11 @@ class EstimationProblem:
     def _start_values(self) -> dict:
         return {f.name: f.initial for f in self.free}
 
-    def _substeps(self, e, pe, x0, U, in_labels, values, ratio, max_substeps) -> int:
+    def _substeps(self, e, pe, x0, U, in_labels, values, ratio, max_substeps,
+                  traj=None) -> int:
         """Substeps for experiment ``e`` from the fastest time constant with the free
-        parameters at ``values`` and the inputs at their largest magnitude."""
+        parameters at ``values`` and the inputs at their largest magnitude, along the
+        states of ``traj`` (default: a coarse probe run)."""
         cm = self.cm
         pindex = {n: i for i, n in enumerate(cm.param_names)}
         p = pe.copy()
@@ -330,8 +332,9 @@ class EstimationProblem:
         for j, lab in enumerate(in_labels):
             p[pindex[self.inputs[lab]]] = U[j][np.argmax(np.abs(U[j]))] if U[j].size else 0
         # states along a coarse (one substep, L-stable) simulation at these values
-        probe = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels], [],
-                           substeps=1, hold=e.hold, smooth=self.smooth)
+        probe = traj or Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
+                                   [], substeps=1, hold=e.hold, smooth=self.smooth,
+                                   jit=self._use_jit(e.n))
         pp = pe.copy()
         for name, v in values.items():
             pp[pindex[name]] = v
@@ -348,7 +351,7 @@ class EstimationProblem:
         changed = False
         for b in self.bound:
             m = self._substeps(b["exp"], b["p"], b["x0"], b["U"], b["in_labels"],
-                               values, ratio, max_substeps)
+                               values, ratio, max_substeps, traj=b["traj"])
             if m > b["substeps"]:
                 tr = b["traj"]
                 b["traj"] = Trajectory(self.cm, tr.t, tr.input_index, tr.output_index,

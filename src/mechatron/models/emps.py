@@ -117,7 +117,7 @@ def _equation(M, Fv, Fc, offset, v_c, gtau, kp, kv, Ts, vir_max, qg):
     model = EMPS(M=M, Fv=Fv, Fc=Fc, offset=offset, v_c=v_c, gtau=gtau, kp=kp, kv=kv,
                  Ts=Ts, vir_max=vir_max)
     model._name = "emps"
-    model._starts["qg"] = mt.Start(qg, "high")     # the input's value when none is given
+    model._starts["qg"] = mt.Start(qg, "none")     # the input's value when none is given
     return model
 
 
