@@ -167,3 +167,37 @@ def test_a_clock_between_the_substeps_is_refused():
     # three substeps put every 10 ms tick on a 5 ms substep end
     EstimationProblem(cm, [exp], ["K"], inputs={"r": "r"}, outputs={"y": "w"},
                       substeps=3)
+
+
+class StepDrivenLag(mt.Component):
+    """``tau x' = -x + u`` with a step of ``u`` at ``t_step`` (a switching time known in
+    advance, a time event)."""
+
+    tau = mt.Parameter("s", default=0.1)
+    t_step = mt.Parameter("s", default=0.2)
+    x = mt.Variable("1", start=0.0)
+
+    def equations(self):
+        return [self.tau * mt.der(self.x) == -self.x + mt.if_else(self.time < self.t_step,
+                                                                 0.0, 1.0)]
+
+
+def test_a_known_switching_time_on_the_grid_is_exact_and_off_it_refused():
+    t = np.round(np.arange(0, 1.0 + 1e-9, 0.01), 12)
+    cm = mt.compile_model(StepDrivenLag())
+    traj = Trajectory(cm, t, [], [cm.names.index("x")], substeps=4)
+    traj.check_ticks(cm.p0)
+    y = traj(cm.p0, np.zeros(1), np.zeros((0, t.size)))[0][0]
+    exact = np.where(t < 0.2, 0.0, 1 - np.exp(-(t - 0.2) / 0.1))
+    np.testing.assert_allclose(y, exact, atol=1e-8)
+    # d x(t)/d tau, analytic, through the exact switching instant
+    D = np.zeros((cm.p0.size, 1))
+    D[cm.param_names.index("tau"), 0] = 1.0
+    dy = np.array(traj.sensitivity_function(D)(cm.p0, np.zeros(1), np.zeros((0, t.size)),
+                                               np.zeros((1, 1)))[0 + 1]).ravel()
+    s = np.clip(t - 0.2, 0, None)
+    np.testing.assert_allclose(dy, -s / 0.1 ** 2 * np.exp(-s / 0.1), atol=1e-7)
+    traj.check_ticks(cm.parameter_vector({"t_step": 0.205}))     # a substep end
+    p = cm.parameter_vector({"t_step": 0.2063})
+    with pytest.raises(DataError, match=r"relation of time switches between t = 0\.205 s"):
+        traj.check_ticks(p)

@@ -46,9 +46,9 @@ saturations included).
 
 * **Time events** (clock ticks, relations of time, discrete states, inputs held by a
   zero-order hold) are exact, value and sensitivity, when their instants are substep ends:
-  a clock whose ticks are sample times, or fall on the substep grid, is checked
-  (:meth:`Trajectory.check_ticks`; a tick between substeps is an error, not a late
-  update). At a fixed event time ``dg/dtheta`` is the whole sensitivity jump.
+  clock ticks and the switching times of relations of time are checked against the
+  substep grid (:meth:`Trajectory.check_ticks`; one between substeps is an error, not a
+  late update). At a fixed event time ``dg/dtheta`` is the whole sensitivity jump.
 * **State events** (a relation whose distance moves with the continuous states, such as
   ``sign(v)`` or a ``Saturation`` block on a state; with ``hold="linear"`` also one on an
   input) would be found one substep late, with a sensitivity that misses the jump of the
@@ -567,6 +567,34 @@ class Trajectory:
                 f"sample); its update would act late. Sample the data on the clock's "
                 f"ticks, or choose substeps that put every tick on a substep end.",
                 path=owner)
+        self._check_time_relations(np.asarray(p, dtype=float), grid)
+
+    def _check_time_relations(self, p, grid) -> None:
+        """Raise if a relation of time alone (a step at a known time) switches strictly
+        between two substep ends: its distance changes sign there."""
+        cm = self.cm
+        t, X, pp, d = _dist_symbols(cm)
+        ks = [k for k, (_o, op) in enumerate(cm.relations)
+              if op in ("<", "<=", "sign") and ca.depends_on(d[k], t)
+              and not ca.depends_on(d[k], X)
+              and not (self.input_index and ca.depends_on(
+                  d[k], ca.vertcat(*[pp[i] for i in self.input_index])))]
+        if not ks:
+            return
+        f = ca.Function("time_relations", [t, pp], [ca.vertcat(*[d[k] for k in ks])])
+        D = np.array(f.map(grid.size)(grid.reshape(1, -1), ca.repmat(ca.DM(p), 1, grid.size)))
+        for row, k in zip(D, ks):
+            # a switching time on a grid point, to rounding, is on the grid
+            s = np.sign(np.where(np.abs(row) <= 1e-9 * np.abs(row).max(), 0.0, row))
+            cross = np.flatnonzero((s[:-1] * s[1:]) < 0)
+            if cross.size:
+                j = cross[0]
+                owner = cm.relations[k][0] or cm.name
+                raise DataError(
+                    f"{owner}: a relation of time switches between t = {grid[j]:.9g} s "
+                    f"and {grid[j + 1]:.9g} s, inside a substep; its effect would come "
+                    f"late. Put the switching time on a sample (or substep) instant.",
+                    path=owner)
 
     def check_convergence(self, E) -> None:
         """Raise if a sample's Newton iteration did not converge. ``E`` (nx, N-1): per
