@@ -187,6 +187,13 @@ def _blended_ode(cm: CompiledModel) -> ca.Function:
     return cm._cache[key]
 
 
+def _any_of(flags) -> ca.SX:
+    out = ca.SX(0)
+    for f in flags:
+        out = ca.logic_or(out, f)
+    return out
+
+
 def clocks(cm: CompiledModel, p) -> list[tuple[int, float, float]]:
     """``(relation index, period, offset)`` of every clock at the parameter values ``p``
     (read from the clock's distance ``t - (offset + c period)`` at ``c = 0`` and 1)."""
@@ -406,9 +413,34 @@ class Trajectory:
         pu = self._with_u(u)
         Xn = cm.f_events(t, ca.vertcat(self._x, self._r), ca.SX(0, 1), pu)
         xn = Xn[:cm.nx]
-        return ca.Function("sample_events", [self._x, self._r, self._p, u, t],
+        fire = ca.Function("sample_events", [self._x, self._r, self._p, u, t],
                            [xn, Xn[cm.nx:], ca.jacobian(xn, self._x),
                             ca.jacobian(xn, self._p)])
+        # the event iteration is costly (up to 100 conditional rounds): it runs only where
+        # something can happen, a clock due or a relation whose distance disagrees with
+        # its mode; elsewhere the state passes unchanged (what the iteration would give)
+        skip = ca.Function("no_events", [self._x, self._r, self._p, u, t],
+                           [self._x, self._r, ca.DM.eye(cm.nx),
+                            ca.DM.zeros(cm.nx, self._p.numel())])
+        self._event_switch = ca.Function.conditional("sample_events_if", [skip], fire)
+        tt, XX, pp, d = _dist_symbols(cm)
+        hs = ca.SX.sym("h_substep")
+        X = ca.vertcat(self._x, self._r)
+        dd = ca.substitute(d, ca.vertcat(tt, XX, pp), ca.vertcat(t, X, pu))
+        flags = []
+        for k, (_o, op) in enumerate(cm.relations):
+            mode = self._r[k]
+            if op == "clock":
+                flags.append(dd[k] >= -1e-6 * hs)
+            elif op in ("<", "<=", "sign"):
+                at_zero = 1.0 if op in ("<=", "sign") else -1.0
+                new = ca.if_else(dd[k] > 0, 1, ca.if_else(dd[k] < 0, -1, at_zero))
+                flags.append(new != mode)
+            else:
+                flags.append((dd[k] > 0) != (mode > 0))
+        self._event_flag = ca.Function("events_due", [self._x, self._r, self._p, u, t, hs],
+                                       [_any_of(flags)])
+        return fire
 
     def _substep(self, xi, args):
         """One Radau substep from ``xi``: the new state and, per state, the scaled
@@ -488,7 +520,9 @@ class Trajectory:
             e = ca.fmax(e, ej)
             if self.events:
                 t_end = tk + h if j == m - 1 else tk + (j + 1) * h / m
-                xi, ri, jx, jp = self._event_fn(xi, ri, p, self._u_end(j, m), t_end)
+                ue = self._u_end(j, m)
+                due = self._event_flag(xi, ri, p, ue, t_end, h / m)
+                xi, ri, jx, jp = self._event_switch(due, xi, ri, p, ue, t_end)
                 if sens:
                     Si = ca.mtimes(jx, Si) + ca.mtimes(jp, Dm)
         return h, tk, xi, ri, Si, e
