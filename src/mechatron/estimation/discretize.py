@@ -669,7 +669,6 @@ class Trajectory:
             return self._sens[key]
         cm = self.cm
         nx, npar, nu = cm.nx, cm.p0.size, len(self.input_index)
-        nr3 = self._r.numel()
         q = D.shape[1]
         x, r, p, u0 = self._x, self._r, self._p, self._u0
         Dm = ca.DM(D)
@@ -696,14 +695,12 @@ class Trajectory:
         else:
             XA, E = xa0, ca.MX(nx, 0)
         tt, yo = self._outputs_sx()
-        X = self._full(x, r)
         dy = ca.mtimes(ca.jacobian(yo, x), S) + ca.mtimes(ca.jacobian(yo, p), Dm)
         out = ca.Function("outputs_sens", [tt, xa, p, u0], [yo, ca.vec(dy)])
         if self.jit:
             out = native(out)
         out = out.map(N)
         Y, dY = out(ca.DM(self.t.reshape(1, -1)), XA, ca.repmat(P, 1, N), U)
-        del X, nr3
         f = _Checked(ca.Function("trajectory_sens", [P, x0, U, S0], [Y, dY, E],
                                  ["p", "x0", "U", "S0"], ["Y", "dY", "newton"]), self)
         self._sens[key] = f
