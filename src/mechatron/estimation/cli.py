@@ -9,7 +9,9 @@ plots and the full result as JSON.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import logging
 import sys
 import time
 from pathlib import Path
@@ -75,8 +77,11 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     prob = build_estimation(cfg)
     setup = time.perf_counter() - t0
     bar = Progress("estimate", enabled=not args.quiet)
-    res = estimate(prob, max_iterations=args.max_iterations,
-                   callback=lambda k, th, cost: bar.update(k, f"(iteration), cost {cost:.6g}"))
+    with _printed_here():
+        res = estimate(prob, max_iterations=args.max_iterations,
+                       covariance=args.covariance, profile=_profile_arg(args.profile),
+                       callback=lambda k, th, cost: bar.update(
+                           k, f"(iteration), cost {cost:.6g}"))
     bar.close()
     doc = res.to_dict()
     doc["setup_s"] = setup
@@ -109,9 +114,38 @@ def cmd_estimate(args: argparse.Namespace) -> int:
               if abs(res.correlation[a, b]) > 0.9]
     if strong:
         emit("  strongly correlated: " + ", ".join(f"{a}/{b} {c:+.3f}" for a, b, c in strong))
+    if res.profile_ci95:
+        emit("  profile-likelihood 95% intervals: " + "; ".join(
+            f"{k} [{lo:.6g}, {hi:.6g}]" for k, (lo, hi) in res.profile_ci95.items()))
+    for w in res.warnings:
+        emit(f"  ! {w}")
     for f in files:
         emit(f"  wrote {f}")
     return 0
+
+
+class _Drop(logging.Filter):
+    def filter(self, record) -> bool:
+        return False
+
+
+@contextlib.contextmanager
+def _printed_here():
+    """Hold back the estimator's warnings (correlated residuals, parameters at bounds or
+    poorly identified): the command prints them in its summary and JSON."""
+    logger = logging.getLogger("mechatron.estimation.problem")
+    drop = _Drop()
+    logger.addFilter(drop)
+    try:
+        yield
+    finally:
+        logger.removeFilter(drop)
+
+
+def _profile_arg(value):
+    if not value:
+        return ()
+    return True if value == ["all"] else [v for item in value for v in item.split(",")]
 
 
 def _bound_note(hit: dict | None) -> str:
@@ -264,6 +298,12 @@ def add_commands(sub) -> None:
     p.add_argument("--out", metavar="DIR", help="write plots and the result as JSON here")
     p.add_argument("--max-iterations", type=int, default=100, metavar="N",
                    help="limit on solver iterations (default: %(default)s)")
+    p.add_argument("--covariance", choices=("hac", "white"), default="hac",
+                   help="interval covariance: hac (Newey-West, for correlated residuals; "
+                        "default) or white (independent errors only)")
+    p.add_argument("--profile", action="append", metavar="NAME[,NAME]",
+                   help="also compute profile-likelihood intervals of these parameters "
+                        "('all' for every one)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_json(p)
     p.set_defaults(func=cmd_estimate)

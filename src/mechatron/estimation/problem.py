@@ -25,10 +25,15 @@ full Gauss-Newton step can jump to a bound and into another valley). With
 Uncertainty
 -----------
 With ``J`` the Jacobian at the optimum, ``n`` residuals and ``q`` free parameters, the
-covariance is ``C = s^2 (J^T J)^-1`` with ``s^2 = S / (n - q)``; the 95% interval of
-``theta_i`` is ``theta_i -/+ t_{0.975, n-q} sqrt(C_ii)``; the correlation matrix is
-``C_ij / sqrt(C_ii C_jj)``. These are the usual linearized (asymptotic) intervals; they
-assume white measurement errors and a model that can describe the data.
+white-noise covariance is ``C = s^2 (J^T J)^-1`` with ``s^2 = S / (n - q)`` and the 95%
+interval ``theta_i -/+ t_{0.975, n-q} sqrt(C_ii)``. Residuals of dynamic models are
+rarely white, so by default (``covariance="hac"``) the covariance is the Newey-West
+sandwich with a Bartlett lag window and the interval uses the fixed-b critical value
+(:mod:`.uncertainty`, which also says why not a bootstrap); both are reported. The
+correlation matrix is ``C_ij / sqrt(C_ii C_jj)``. Correlated residuals and poorly
+identified parameters (with their correlation partners) are warned about
+(``result.warnings``); profile-likelihood intervals are computed on request. All assume
+a model that can describe the data.
 
 Fit
 ---
@@ -54,6 +59,8 @@ from mechatron.errors import DataError, ParameterError
 from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.data import unit_factor
 from mechatron.estimation.native import compiler
+from mechatron.estimation.uncertainty import (RHO_WARN, acf, bartlett_critical, diagnose,
+                                              hac_covariance, profile_interval)
 from mechatron.estimation.discretize import (Trajectory, check_model, choose_substeps,
                                              fastest_time_constant)
 
@@ -358,6 +365,21 @@ class EstimationProblem:
             sum(b["exp"].n - (self._outspec[lab][1] == "rate") for lab in b["out_labels"])
             for b in self.bound)
 
+    def residual_groups(self) -> list:
+        """Per experiment, ``(rows, sample index)`` of the residuals of each output (in
+        the order of :meth:`residuals`): the time structure for
+        :func:`~mechatron.estimation.uncertainty.hac_covariance`."""
+        out, k0 = [], 0
+        for b in self.bound:
+            segs = []
+            for lab in b["out_labels"]:
+                first = int(self._outspec[lab][1] == "rate")
+                m = b["exp"].n - first
+                segs.append((slice(k0, k0 + m), np.arange(first, first + m)))
+                k0 += m
+            out.append(segs)
+        return out
+
     def _point(self, b, theta):
         cm = self.cm
         p = b["p"].copy()
@@ -492,6 +514,19 @@ class EstimationResult:
     #: (see :func:`~mechatron.estimation.bounds.at_bounds`); their intervals assume an
     #: interior optimum and do not hold there.
     at_bound: dict = field(default_factory=dict)
+    #: ``"hac"`` or ``"white"``: how ``std``, ``ci95`` and ``correlation`` were computed.
+    covariance: str = "white"
+    #: Standard errors and intervals assuming white residuals, for comparison.
+    std_white: np.ndarray = None
+    ci95_white: dict = field(default_factory=dict)
+    #: Bartlett bandwidth as a fraction of the record (0 for white).
+    bandwidth_fraction: float = 0.0
+    #: Lag-1 autocorrelation of the residuals by ``"experiment/label"``.
+    residual_rho1: dict = field(default_factory=dict)
+    #: Correlated residuals, poorly identified parameters (see :mod:`.uncertainty`).
+    warnings: list = field(default_factory=list)
+    #: Profile-likelihood 95% intervals of the parameters asked for.
+    profile_ci95: dict = field(default_factory=dict)
 
     @property
     def parameters(self) -> dict:
@@ -503,6 +538,14 @@ class EstimationResult:
                 "at_bound": self.at_bound,
                 "ci95": {k: [float(lo), float(hi)] for k, (lo, hi) in self.ci95.items()},
                 "std": dict(zip(self.names, map(float, self.std))),
+                "covariance": self.covariance,
+                "std_white": dict(zip(self.names, map(float, self.std_white)))
+                if self.std_white is not None else {},
+                "ci95_white": {k: [float(lo), float(hi)]
+                               for k, (lo, hi) in self.ci95_white.items()},
+                "profile_ci95": {k: [float(lo), float(hi)]
+                                 for k, (lo, hi) in self.profile_ci95.items()},
+                "residual_rho1": self.residual_rho1, "warnings": self.warnings,
                 "correlation": {"names": self.names,
                                 "matrix": np.round(self.correlation, 6).tolist()},
                 "cost_initial": self.cost_initial, "cost": self.cost,
@@ -592,11 +635,22 @@ def _nrmse(prob: EstimationProblem, sims: list[dict]) -> dict:
 def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: float = 1e-8,
              ftol: float = 1e-10, gtol: float = 1e-10, callback=None, refine: bool = True,
              fine_ratio: float = 1.0, max_step: float = 0.5,
-             log_space: bool = False) -> EstimationResult:
+             log_space: bool = False, covariance: str = "hac", bandwidth=None,
+             profile=()) -> EstimationResult:
     """Solve ``problem`` (see the module docstring); ``callback(iteration, theta, cost)``
-    is called after each Jacobian evaluation (one per iteration) for progress display."""
+    is called after each Jacobian evaluation (one per iteration) for progress display.
+
+    ``covariance`` is ``"hac"`` (default: the Newey-West sandwich with a Bartlett window,
+    valid for correlated residuals, see :mod:`.uncertainty`) or ``"white"`` (the
+    textbook ``s^2 (J^T J)^-1``, for independent errors only); ``bandwidth`` fixes the
+    Bartlett bandwidth in samples (default: Andrews' rule). ``profile`` names parameters
+    (or ``True`` for all) whose profile-likelihood intervals are computed as well
+    (``result.profile_ci95``; a few fits each)."""
     from scipy.special import stdtrit
 
+    if covariance not in ("hac", "white"):
+        raise ParameterError(f"estimate: covariance must be 'hac' or 'white', got "
+                             f"{covariance!r}.")
     prob = problem
     scales = np.array(prob.scales)
     lo_t, hi_t = prob.bounds
@@ -697,15 +751,45 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     s2 = cost / dof
     JtJ = J.T @ J
     try:
-        cov = s2 * np.linalg.inv(JtJ)
+        cov_white = s2 * np.linalg.inv(JtJ)
     except np.linalg.LinAlgError:
-        cov = s2 * np.linalg.pinv(JtJ)
+        cov_white = s2 * np.linalg.pinv(JtJ)
+    std_white = np.sqrt(np.clip(np.diag(cov_white), 0, None))
+    tq_white = float(stdtrit(dof, 0.975))
+    ci_white = {name: (float(v - tq_white * s), float(v + tq_white * s))
+                for name, v, s in zip(prob.names, theta, std_white)}
+    rho1 = residual_rho1(prob, r)
+    if covariance == "hac":
+        cov, b = hac_covariance(J, r, prob.residual_groups(), bandwidth=bandwidth)
+        tq = bartlett_critical(b)
+    else:
+        cov, b, tq = cov_white, 0.0, tq_white
     std = np.sqrt(np.clip(np.diag(cov), 0, None))
-    tq = float(stdtrit(dof, 0.975))
     ci = {name: (float(v - tq * s), float(v + tq * s))
           for name, v, s in zip(prob.names, theta, std)}
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
+    warnings = diagnose(prob.names, std, theta, corr,
+                        rho1 if covariance == "hac" else {},
+                        std_white=std_white)
+    if covariance != "hac" and any(v > RHO_WARN for v in rho1.values()):
+        warnings.insert(0, "residuals are correlated (lag-1 autocorrelation " + ", ".join(
+            f"{k} {v:.2f}" for k, v in rho1.items() if v > RHO_WARN) + ") but the "
+            "intervals assume white noise (covariance=\"white\"): they are too narrow. "
+            "Use covariance=\"hac\".")
+    for w in warnings:
+        log.warning("estimate: %s", w)
+    profile_ci = {}
+    if profile:
+        names = list(prob.names) if profile is True else list(profile)
+        for name in names:
+            if name not in prob.names:
+                raise ParameterError(f"estimate: profile: '{name}' is not a free "
+                                     f"parameter ({', '.join(prob.names)}).", path=name)
+            i = prob.names.index(name)
+            ratio = (std[i] / std_white[i]) ** 2 if std_white[i] > 0 else 1.0
+            thr = s2 * tq ** 2 * max(ratio, 1.0 if covariance == "white" else 0.0)
+            profile_ci[name] = profile_interval(prob, theta, i, thr, std[i])
     wall = time.perf_counter() - start
     lo_b, hi_b = prob.bounds
     hits = at_bounds(prob.names, theta, lo_b, hi_b)
@@ -717,4 +801,18 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
         nrmse=_nrmse(prob, prob.simulate(theta)),
         nrmse_initial=_nrmse(prob, prob.simulate(prob.initial)), history=history,
         iterations=len(history) - 1, evaluations=counts["sims"], wall_time=wall,
-        success=bool(success), message=message, problem=prob, at_bound=hits)
+        success=bool(success), message=message, problem=prob, at_bound=hits,
+        covariance=covariance, std_white=std_white, ci95_white=ci_white,
+        bandwidth_fraction=b, residual_rho1=rho1, warnings=warnings,
+        profile_ci95=profile_ci)
+
+
+def residual_rho1(prob: EstimationProblem, r: np.ndarray) -> dict:
+    """Lag-1 autocorrelation of the residuals of each experiment and output, by
+    ``"experiment/label"``."""
+    out = {}
+    for b, segments in zip(prob.bound, prob.residual_groups()):
+        for lab, (rows, _k) in zip(b["out_labels"], segments):
+            out[f"{b['exp'].name}/{lab}"] = float(acf(r[rows], 1)[-1]) \
+                if r[rows].size > 2 else 0.0
+    return out
