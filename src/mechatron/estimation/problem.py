@@ -58,6 +58,7 @@ from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import DataError, ParameterError
 from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.data import unit_factor
+from mechatron.estimation.expressions import parse_output
 from mechatron.estimation.native import compiler
 from mechatron.estimation.uncertainty import (RHO_WARN, acf, bartlett_critical, diagnose,
                                               hac_covariance, profile_interval)
@@ -123,6 +124,11 @@ class EstimationProblem:
         Outputs that get an estimated constant sensor offset (shared by the experiments).
     free_x0 : list of state names
         Initial states estimated per experiment.
+    per_experiment : dict experiment name -> list of str, dict or FreeParameter
+        Parameters estimated separately for each experiment named (an initial position
+        or a sensor offset per run), next to the shared ``free`` ones; the decision
+        variable is ``"<experiment>:<parameter>"``. The start value defaults to the
+        experiment's ``params``, then to ``fixed`` and the model's value.
     substeps : int or None
         Radau substeps per sample; ``None`` chooses them from the fastest time constant at
         the starting values (at most ``max_substeps``).
@@ -131,7 +137,8 @@ class EstimationProblem:
     """
 
     def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
-                 offsets=(), free_x0=(), substeps=None, max_substeps: int = 400,
+                 offsets=(), free_x0=(), per_experiment=None, substeps=None,
+                 max_substeps: int = 400,
                  step_ratio: float = 4.0, jit="auto"):
         for m in (substeps if isinstance(substeps, (list, tuple)) else [substeps]):
             if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer))
@@ -150,9 +157,12 @@ class EstimationProblem:
         self.fixed = dict(fixed or {})
         self.offsets = list(offsets)
         self.free_x0 = list(free_x0)
+        self.per_experiment = {k: [_as_free(f) for f in v]
+                               for k, v in dict(per_experiment or {}).items()}
         self.jit = jit
         self._init = dict(inputs=self.inputs, outputs=self.outputs, fixed=self.fixed,
                           offsets=self.offsets, free_x0=self.free_x0,
+                          per_experiment=self.per_experiment,
                           max_substeps=max_substeps, step_ratio=step_ratio, jit=jit)
         pindex = {n: i for i, n in enumerate(cm.param_names)}
         problems = []
@@ -164,15 +174,34 @@ class EstimationProblem:
             if path not in pindex:
                 problems.append(f"input '{lab}' drives '{path}', which is not a parameter "
                                 f"of model '{cm.name}'.")
-        self._outspec = {lab: _parse_output(spec) for lab, spec in self.outputs.items()}
-        for lab, (path, _kind) in self._outspec.items():
-            if path not in cm.names:
-                problems.append(f"output '{lab}' is compared with '{path}', which the "
-                                f"model '{cm.name}' does not log.")
+        self._outspec = {}
+        for lab, spec in self.outputs.items():
+            try:
+                self._outspec[lab] = parse_output(spec, cm.names, f"output '{lab}'")
+            except DataError as exc:
+                problems.append(str(exc).replace("the model does not log",
+                                                 f"the model '{cm.name}' does not log"))
         for s in self.free_x0:
             if s not in cm.state_names:
                 problems.append(f"free initial state '{s}' is not a state of '{cm.name}' "
                                 f"(states: {', '.join(cm.state_names)}).")
+        exp_names = [e.name for e in self.experiments]
+        shared = {f.name for f in self.free}
+        for ename, fs in self.per_experiment.items():
+            if ename not in exp_names:
+                problems.append(f"per-experiment parameters for '{ename}', which is not "
+                                f"an experiment (experiments: {', '.join(exp_names)}).")
+            elif exp_names.count(ename) > 1:
+                problems.append(f"per-experiment parameters for '{ename}': "
+                                f"{exp_names.count(ename)} experiments have that name; "
+                                "name them apart.")
+            for f in fs:
+                if f.name not in pindex:
+                    problems.append(f"experiment '{ename}': free parameter '{f.name}' is "
+                                    f"not a parameter of model '{cm.name}'.")
+                elif f.name in shared:
+                    problems.append(f"experiment '{ename}': '{f.name}' is free both per "
+                                    "experiment and shared; choose one.")
         for lab in self.offsets:
             if lab not in self.outputs:
                 problems.append(f"offset for '{lab}', which is not a measured output.")
@@ -194,9 +223,26 @@ class EstimationProblem:
                                      path=f.name)
             if f.scale is None:
                 f.scale = abs(f.initial) or 1.0
-        # the decision vector: parameters, offsets, per-experiment initial states
+        for e in self.experiments:
+            for f in self.per_experiment.get(e.name, []):
+                i = pindex[f.name]
+                if f.initial is None:
+                    f.initial = float(e.params.get(f.name, self.base[i]))
+                lo, hi = cm.param_bounds[i] if cm.param_bounds else (None, None)
+                f.min = max(f.min, lo) if lo is not None else f.min
+                f.max = min(f.max, hi) if hi is not None else f.max
+                if not (f.min <= f.initial <= f.max):
+                    raise ParameterError(f"experiment '{e.name}': free parameter "
+                                         f"'{f.name}': starting value {f.initial:g} is "
+                                         f"outside [{f.min:g}, {f.max:g}].", path=f.name)
+                if f.scale is None:
+                    f.scale = abs(f.initial) or 1.0
+        # the decision vector: parameters, offsets, per-experiment initial states and
+        # parameters
         self.names = [f.name for f in self.free] + [f"offset:{lab}" for lab in self.offsets]
         self.names += [f"{e.name}:{s}" for e in self.experiments for s in self.free_x0]
+        self.names += [f"{e.name}:{f.name}" for e in self.experiments
+                       for f in self.per_experiment.get(e.name, [])]
         self._bind(substeps, max_substeps, step_ratio)
 
     # ------------------------------------------------------------------------------------
@@ -257,11 +303,15 @@ class EstimationProblem:
                 except DataError as exc:
                     problems.append(str(exc))
                     continue
+            paths = list(dict.fromkeys(p for lab in out_labels
+                                       for p in self._outspec[lab].paths))
             traj = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
-                              [cm.names.index(self._outspec[lab][0]) for lab in out_labels],
+                              [cm.names.index(p) for p in paths],
                               substeps=m, hold=e.hold, jit=self._use_jit(e.n * m))
+            rows = [[paths.index(p) for p in self._outspec[lab].paths] for lab in out_labels]
             self.bound.append(dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), p=pe, x0=x0,
-                                   traj=traj, out_labels=out_labels, substeps=m))
+                                   traj=traj, out_labels=out_labels, substeps=m,
+                                   out_rows=rows))
         if problems:
             raise DataError(" ".join(problems), problems=problems)
         self._build_residual()
@@ -274,9 +324,29 @@ class EstimationProblem:
         return bool(self.jit)
 
     def _output_unit(self, lab: str) -> str:
-        path, kind = self._outspec[lab]
-        unit = self.cm.units[self.cm.names.index(path)]
-        return f"({unit})/s" if kind == "rate" else unit
+        spec = self._outspec[lab]
+        unit = spec.unit(dict(zip(self.cm.names, self.cm.units)))
+        return f"({unit or '1'})/s" if spec.kind == "rate" else unit
+
+    def _label_output(self, b, r: int, Y, dY=None):
+        """Model output ``r`` of experiment ``b`` (its expression of the simulated
+        variables) and, with their sensitivities ``dY``, its own ``(N, nq)``."""
+        spec = self._outspec[b["out_labels"][r]]
+        rows = b["out_rows"][r]
+        V = np.asarray(Y)[rows]
+        if spec.plain:
+            y = V[0]
+            dy = dY[rows[0]::Y.shape[0], :].T if dY is not None else None
+            return y, dy
+        f = spec.function.map(V.shape[1])
+        val, grad = f(V)
+        y = np.asarray(val).ravel()
+        if dY is None:
+            return y, None
+        grad = np.asarray(grad).reshape(V.shape[1], len(rows)) if len(rows) > 1 else \
+            np.asarray(grad).reshape(V.shape[1], 1)
+        dy = sum(grad[:, j:j + 1] * dY[i::Y.shape[0], :].T for j, i in enumerate(rows))
+        return y, dy
 
     def use_native(self) -> bool:
         """Compile every experiment's step functions to native code (for many
@@ -361,6 +431,12 @@ class EstimationProblem:
                 cols.append(k0)
                 k0 += 1
             b["D"], b["S0"], b["x0_cols"] = D, S0, cols
+        for b in self.bound:
+            b["pe_cols"] = []
+            for f in self.per_experiment.get(b["exp"].name, []):
+                b["D"][pindex[f.name], k0] = 1.0
+                b["pe_cols"].append((pindex[f.name], k0, f))
+                k0 += 1
         self.n_residuals = sum(
             sum(b["exp"].n - (self._outspec[lab][1] == "rate") for lab in b["out_labels"])
             for b in self.bound)
@@ -388,19 +464,19 @@ class EstimationProblem:
         x0 = b["x0"].copy()
         for s, c in zip(self.free_x0, b["x0_cols"]):
             x0[cm.state_names.index(s)] = theta[c]
+        for i, c, _f in b["pe_cols"]:
+            p[i] = theta[c]
         return p, x0
 
     def _assemble(self, b, theta, Y, dY=None):
         """Weighted residuals (and their Jacobian) of one experiment from its outputs."""
         nf = len(self.free)
         nq = len(self.names)
-        n_out = len(b["out_labels"])
         r_parts, j_parts = [], []
         dt = np.diff(b["exp"].t)
         for r, lab in enumerate(b["out_labels"]):
-            y = Y[r]
+            y, dy = self._label_output(b, r, Y, dY)                 # (N,), (N, nq)
             ym = b["Ym"][r]
-            dy = dY[r::n_out, :].T if dY is not None else None      # (N, nq)
             if self._outspec[lab][1] == "rate":
                 y = np.diff(y) / dt
                 ym = ym[1:]
@@ -450,6 +526,8 @@ class EstimationProblem:
         for b in self.bound:
             for s in self.free_x0:
                 vals.append(b["x0"][self.cm.state_names.index(s)])
+        for b in self.bound:
+            vals += [f.initial for _i, _c, f in b["pe_cols"]]
         return np.array(vals, dtype=float)
 
     @property
@@ -459,13 +537,16 @@ class EstimationProblem:
             b = next(b for b in self.bound if lab in b["out_labels"]) if getattr(
                 self, "bound", None) else None
             out.append(float(b["sigma"][b["out_labels"].index(lab)]) if b else 1.0)
-        out += [1.0] * (len(self.names) - len(out))
+        pe = [f.scale for b in getattr(self, "bound", []) for _i, _c, f in b["pe_cols"]]
+        out += [1.0] * (len(self.names) - len(out) - len(pe)) + pe
         return out
 
     @property
     def bounds(self):
-        lo = [f.min for f in self.free] + [-math.inf] * (len(self.names) - len(self.free))
-        hi = [f.max for f in self.free] + [math.inf] * (len(self.names) - len(self.free))
+        pe = [f for b in self.bound for _i, _c, f in b["pe_cols"]]
+        rest = len(self.names) - len(self.free) - len(pe)
+        lo = [f.min for f in self.free] + [-math.inf] * rest + [f.min for f in pe]
+        hi = [f.max for f in self.free] + [math.inf] * rest + [f.max for f in pe]
         return np.array(lo), np.array(hi)
 
     def simulate(self, theta=None) -> list[dict]:
@@ -479,7 +560,7 @@ class EstimationProblem:
             Y, _ = b["traj"](p, x0, b["U"])
             sims = {}
             for r, lab in enumerate(b["out_labels"]):
-                y = Y[r]
+                y, _ = self._label_output(b, r, Y)
                 if self._outspec[lab][1] == "rate":
                     y = np.concatenate([[b["Ym"][r][0]], np.diff(y) / np.diff(b["exp"].t)])
                 if lab in self.offsets:
@@ -608,16 +689,6 @@ class EstimationResult:
 
 def _rebuild(cm, experiments, free, kwargs):
     return EstimationProblem(cm, experiments, free, **kwargs)
-
-
-def _parse_output(spec: str) -> tuple[str, str]:
-    """``"path"`` -> (path, "value"); ``"rate(path)"`` -> (path, "rate"): the increment of
-    the variable over the previous sample interval divided by its length (what a drive
-    computes from encoder counts), compared from the second sample on."""
-    spec = str(spec).strip()
-    if spec.startswith("rate(") and spec.endswith(")"):
-        return spec[5:-1].strip(), "rate"
-    return spec, "value"
 
 
 def _nrmse(prob: EstimationProblem, sims: list[dict]) -> dict:
