@@ -13,7 +13,7 @@ of the listed functions. Nothing is evaluated as Python (no ``eval``), so
 ``__import__('os')`` or ``x.__class__`` are refused with a message naming the output.
 The expression becomes a CasADi function of the variables with its gradient, evaluated
 on all samples at once; the unit is the expression's own, computed by pint (adding volts
-to amperes is an error).
+to amperes is an error; a number added to a quantity is in its SI unit).
 """
 
 from __future__ import annotations
@@ -175,6 +175,12 @@ def _walk(node, leaf, *, numeric: bool, check_only: bool = False):
     if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
         a = _walk(node.left, leaf, numeric=numeric, check_only=check_only)
         b = _walk(node.right, leaf, numeric=numeric, check_only=check_only)
+        if numeric and isinstance(node.op, (ast.Add, ast.Sub)):
+            # a number added to a quantity is in that quantity's (SI) unit
+            if isinstance(a, float) and hasattr(b, "units"):
+                a = b.__class__(a, b.units)
+            elif isinstance(b, float) and hasattr(a, "units"):
+                b = a.__class__(b, a.units)
         return None if check_only else _BINOPS[type(node.op)](a, b)
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
         a = _walk(node.operand, leaf, numeric=numeric, check_only=check_only)

@@ -842,7 +842,7 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
         corr = cov / np.outer(std, std)
     warnings = diagnose(prob.names, std, theta, corr,
                         rho1 if covariance == "hac" else {},
-                        std_white=std_white)
+                        std_white=std_white, relative=[f.name for f in prob.free])
     if covariance != "hac" and any(v > RHO_WARN for v in rho1.values()):
         warnings.insert(0, "residuals are correlated (lag-1 autocorrelation " + ", ".join(
             f"{k} {v:.2f}" for k, v in rho1.items() if v > RHO_WARN) + ") but the "

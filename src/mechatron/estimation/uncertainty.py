@@ -191,12 +191,15 @@ def ccf(x: np.ndarray, u: np.ndarray, lags: int) -> np.ndarray:
     return out
 
 
-def diagnose(names, std, values, correlation, rho1: dict, *, std_white=None) -> list[str]:
+def diagnose(names, std, values, correlation, rho1: dict, *, std_white=None,
+             relative=None) -> list[str]:
     """Warnings about correlated residuals and poorly identified parameters.
 
     ``rho1`` maps ``"experiment/signal"`` to the lag-1 autocorrelation of its residuals;
     ``std_white`` (optional) the white-noise standard errors, to say how much narrower
-    the naive intervals would be."""
+    the naive intervals would be; ``relative`` the names whose relative standard error
+    is checked (default all; values near zero by nature, offsets or initial states, have
+    no meaningful relative error)."""
     out = []
     bad = {k: v for k, v in rho1.items() if v > RHO_WARN}
     if bad:
@@ -223,7 +226,7 @@ def diagnose(names, std, values, correlation, rho1: dict, *, std_white=None) -> 
                        + ", ".join(f"'{p}' ({c:+.3f})" for p, c in partners)
                        + "; only a combination is determined by these data. Fix one of "
                        "them, or add an experiment that separates them.")
-        elif np.isfinite(rel) and rel > 0.5:
+        elif np.isfinite(rel) and rel > 0.5 and (relative is None or name in relative):
             out.append(f"parameter '{name}' is poorly identified: relative standard error "
                        f"{100 * rel:.0f}%. The data hardly depend on it; fix it or excite "
                        "it more.")
