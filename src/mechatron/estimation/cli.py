@@ -169,8 +169,7 @@ def _validation_reports(cfg, res, prob, data) -> list:
     exps = validation_experiments(cfg, data)
     if exps:
         reports.append(validate(res, exps, problem=prob,
-                                per_experiment={} if data else
-                                per_experiment(cfg, "validation")))
+                                per_experiment=per_experiment(cfg, "validation", data)))
     return reports
 
 
@@ -192,9 +191,9 @@ def cmd_validate(args: argparse.Namespace) -> int:
         raise CommandError(f"{args.config}: nothing to validate on; give --data FILE.csv "
                            "or a [[validation]] table in the problem file.")
     prob = build_estimation(cfg)
+    res = None
     if args.fit:
-        fit = _read_fit(args.fit)
-        res = _FitOnly(prob, fit)
+        values = _read_fit(args.fit)
     else:
         bar = Progress("estimate", enabled=not args.quiet)
         with _printed_here():
@@ -202,17 +201,18 @@ def cmd_validate(args: argparse.Namespace) -> int:
                            callback=lambda k, th, cost: bar.update(
                                k, f"(iteration), cost {cost:.6g}"))
         bar.close()
+        values = res.parameters
     from mechatron.estimation.validation import validate
-    reports = [validate(res.parameters, problem=prob)]
+    reports = [validate(values, problem=prob)]
     from mechatron.estimation.config import per_experiment, validation_experiments
-    reports.append(validate(res.parameters, validation_experiments(cfg, args.data or ()),
-                            problem=prob, per_experiment={} if args.data else
-                            per_experiment(cfg, "validation")))
-    doc = {"config": str(args.config), "parameters": res.parameters,
+    reports.append(validate(values, validation_experiments(cfg, args.data or ()),
+                            problem=prob,
+                            per_experiment=per_experiment(cfg, "validation", args.data)))
+    doc = {"config": str(args.config), "parameters": values,
            "validation": {rep.label: rep.to_dict() for rep in reports}}
     files = _save(out, doc, {f"{rep.label}_residuals.png": rep.plot for rep in reports},
                   "validate")
-    if out is not None and not isinstance(res, _FitOnly):
+    if out is not None and res is not None:
         files.append(_html(out / "validate_report.html", res, reports, cfg, args))
         doc["files"].append(str(files[-1]))
     if args.json:
@@ -226,13 +226,6 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for f in files:
         emit(f"  wrote {f}")
     return 0
-
-
-class _FitOnly:
-    """The fitted values of an earlier ``estimate --out`` (its estimate.json)."""
-
-    def __init__(self, prob, values: dict):
-        self.parameters = values
 
 
 def _read_fit(path: str) -> dict:

@@ -461,8 +461,13 @@ def validation_experiments(cfg: dict, data=()) -> list[Experiment]:
     return _experiments(cfg, "validation")
 
 
-def per_experiment(cfg: dict, table: str = "experiments") -> dict:
-    """``{experiment name: [parameter, ...]}`` from ``params_free`` of each entry."""
+def per_experiment(cfg: dict, table: str = "experiments", data=()) -> dict:
+    """``{experiment name: [parameter, ...]}`` from ``params_free`` of each entry; for
+    the files ``data`` (see :func:`validation_experiments`), those of the first
+    ``[[experiments]]`` entry."""
+    if data:
+        free = list(cfg["experiments"][0].get("params_free", []))
+        return {Path(f).stem: free for f in data} if free else {}
     out = {}
     for k, spec in enumerate(cfg.get(table, [])):
         if spec.get("params_free"):
