@@ -58,6 +58,7 @@ from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import DataError, ParameterError
 from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.data import unit_factor
+from mechatron.estimation.delays import prepare_delays, shift
 from mechatron.estimation.expressions import parse_output
 from mechatron.estimation.native import compiler
 from mechatron.estimation.uncertainty import (RHO_WARN, acf, bartlett_critical, diagnose,
@@ -124,6 +125,10 @@ class EstimationProblem:
         Outputs that get an estimated constant sensor offset (shared by the experiments).
     free_x0 : list of state names
         Initial states estimated per experiment.
+    input_delays : dict label -> float
+        Transport delays (s) of measured inputs: the data are shifted (see
+        :mod:`.delays`). A :class:`~mechatron.library.blocks.Delay` block on a measured
+        input of ``model`` adds its delay here by itself.
     per_experiment : dict experiment name -> list of str, dict or FreeParameter
         Parameters estimated separately for each experiment named (an initial position
         or a sensor offset per run), next to the shared ``free`` ones; the decision
@@ -137,15 +142,16 @@ class EstimationProblem:
     """
 
     def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
-                 offsets=(), free_x0=(), per_experiment=None, substeps=None,
-                 max_substeps: int = 400,
+                 offsets=(), free_x0=(), per_experiment=None, input_delays=None,
+                 substeps=None, max_substeps: int = 400,
                  step_ratio: float = 4.0, jit="auto"):
         for m in (substeps if isinstance(substeps, (list, tuple)) else [substeps]):
             if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer))
                                   or m < 1):
                 raise ParameterError(f"estimation: substeps must be a whole number >= 1 "
                                      f"(or None to choose them), got {substeps!r}.")
-        self.cm = compiled(model)
+        self.cm, found = prepare_delays(model, dict(inputs or {}))
+        self.input_delays = {**found, **dict(input_delays or {})}
         check_model(self.cm, "estimation")
         cm = self.cm
         self.experiments = list(experiments)
@@ -163,6 +169,7 @@ class EstimationProblem:
         self._init = dict(inputs=self.inputs, outputs=self.outputs, fixed=self.fixed,
                           offsets=self.offsets, free_x0=self.free_x0,
                           per_experiment=self.per_experiment,
+                          input_delays=self.input_delays,
                           max_substeps=max_substeps, step_ratio=step_ratio, jit=jit)
         pindex = {n: i for i, n in enumerate(cm.param_names)}
         problems = []
@@ -274,6 +281,13 @@ class EstimationProblem:
                 continue
             U = np.array([e.inputs[lab] * f for lab, f in zip(in_labels, fin)]).reshape(
                 len(in_labels), e.n)
+            try:
+                for j, lab in enumerate(in_labels):
+                    if lab in self.input_delays:
+                        U[j] = shift(U[j], e.t, self.input_delays[lab], e.where(lab))
+            except DataError as exc:
+                problems.append(str(exc))
+                continue
             Ym = np.array([e.outputs[lab] * f for lab, f in zip(out_labels, fout)])
             sig = []
             for lab, f, y in zip(out_labels, fout, Ym):

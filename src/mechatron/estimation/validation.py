@@ -155,7 +155,8 @@ def validate(result, experiments=None, *, label: str | None = None, lags: int = 
     free_x0 = list(prob.free_x0)
     vprob = EstimationProblem(prob.cm, list(experiments), [], inputs=prob.inputs,
                               outputs=prob.outputs, fixed={**prob.fixed, **shared},
-                              free_x0=free_x0, per_experiment=per, jit=prob.jit)
+                              free_x0=free_x0, per_experiment=per, jit=prob.jit,
+                              input_delays=prob.input_delays)
     refitted = []
     theta = vprob.initial
     if refit and vprob.names:
@@ -204,7 +205,7 @@ def _report(prob, theta, label, lags, params, refitted, offsets=None) -> Validat
             L = max(1, min(lags, err.size - 2))
             a = acf(err, L)
             band = 1.96 / math.sqrt(err.size)
-            c = {il: ccf(err, b["U"][j][first:], L) for j, il in enumerate(prob.inputs)}
+            c = {il: ccf(err, e.inputs[il][first:], L) for il in prob.inputs}
             rows.append(dict(experiment=e.name, signal=lab, n=int(err.size),
                              rmse=float(np.sqrt(np.mean(err ** 2))), nrmse=nrmse,
                              fit_percent=100.0 * (1.0 - nrmse), rho1=float(a[1]),
