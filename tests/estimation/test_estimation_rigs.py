@@ -230,3 +230,29 @@ def test_output_expressions_refuse_anything_but_arithmetic(text, what):
     cm = mt.compile_model(mt.models.get("dc_motor").build("acausal"))
     with pytest.raises(DataError, match=what):
         parse_output(text, cm.names, "output 'm'")
+
+
+def test_profile_and_covariance_options_of_the_command(rig_problem, capsys):
+    assert main(["estimate", str(rig_problem), "--json", "--quiet", "--profile", "K,tau",
+                 "--covariance", "white"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["covariance"] == "white" and doc["ci95"] == doc["ci95_white"]
+    assert set(doc["profile_ci95"]) == {"K", "tau"}
+    for name in ("K", "tau"):
+        lo, hi = doc["profile_ci95"][name]
+        assert lo < doc["parameters"][name] < hi
+        # the cost is nearly quadratic here: profile and linearized intervals agree
+        assert lo == pytest.approx(doc["ci95"][name][0], rel=1e-3)
+        assert hi == pytest.approx(doc["ci95"][name][1], rel=1e-3)
+
+
+def test_experiment_select_by_rows_and_time():
+    e = Experiment("e", t=np.arange(10) * 0.5, outputs={"y": np.arange(10.0)},
+                   source="e.csv")
+    a = e.select(rows=(2, 5))
+    assert a.t.tolist() == [1.0, 1.5, 2.0] and a.rows.tolist() == [4, 5, 6]
+    b = e.select(t_range=(3.0, None))
+    assert b.outputs["y"].tolist() == [6.0, 7.0, 8.0, 9.0]
+    assert e.select(rows=(-3, None)).n == 3
+    with pytest.raises(DataError, match=r"rows 8:9 keep 1 of 10 samples"):
+        e.select(rows=(8, 9))

@@ -872,8 +872,9 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
                 raise ParameterError(f"estimate: profile: '{name}' is not a free "
                                      f"parameter ({', '.join(prob.names)}).", path=name)
             i = prob.names.index(name)
+            # the likelihood-ratio threshold s^2 c^2, widened by the HAC design effect
             ratio = (std[i] / std_white[i]) ** 2 if std_white[i] > 0 else 1.0
-            thr = s2 * tq ** 2 * max(ratio, 1.0 if covariance == "white" else 0.0)
+            thr = s2 * tq ** 2 * ratio
             profile_ci[name] = profile_interval(prob, theta, i, thr, std[i])
     wall = time.perf_counter() - start
     lo_b, hi_b = prob.bounds
