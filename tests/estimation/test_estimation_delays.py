@@ -83,3 +83,30 @@ def test_a_delay_the_data_cannot_carry_is_refused():
                                         "sample periods"):
         EstimationProblem(_rig(T=0.05, Ts=0.01), [e], FREE, inputs={"u": "cmd.value"},
                           outputs={"y": "lag.y"}, jit=False)
+
+
+def test_a_delay_in_a_model_file_of_a_problem_file(tmp_path, caplog):
+    """The same rig from TOML: [model] file with a Delay, the fit exact."""
+    caplog.set_level(logging.ERROR)
+    from mechatron.estimation.config import build_estimation, load_config
+    (tmp_path / "rig.py").write_text(
+        "import mechatron as mt\n"
+        "from mechatron.library import blocks as bl\n\n\n"
+        "class Rig(mt.Component):\n"
+        "    cmd = bl.Constant(value=0.0)\n"
+        "    dly = bl.Delay(T=\"60 ms\", Ts=\"20 ms\")\n"
+        "    lag = bl.FirstOrder(k=1.0, T=0.5)\n\n"
+        "    def equations(self):\n"
+        "        return [mt.connect(self.cmd.y, self.dly.u),\n"
+        "                mt.connect(self.dly.y, self.lag.u)]\n")
+    e = _data(seed=4)
+    e.save(tmp_path / "run.csv")
+    (tmp_path / "p.toml").write_text(
+        '[model]\nfile = "rig.py"\n\n[[experiments]]\nfile = "run.csv"\ninputs = ["u"]\n'
+        'outputs = ["y"]\n\n[inputs]\nu = "cmd.value"\n[outputs]\ny = "lag.y"\n\n'
+        '[parameters]\n"lag.k" = { initial = 1.0, min = 0.1 }\n'
+        '"lag.T" = { initial = 0.5, min = 0.01 }\n')
+    prob = build_estimation(load_config(tmp_path / "p.toml"))
+    res = estimate(prob)
+    assert res.parameters["lag.k"] == pytest.approx(2.5, rel=1e-6)
+    assert res.parameters["lag.T"] == pytest.approx(0.3, rel=1e-6)

@@ -530,7 +530,10 @@ def build_estimation(cfg: dict, *, model=None):
     fixed = {name: _value(v, units.get(name, ""), name)
              for name, v in cfg.get("fixed", {}).items()}
     opts = cfg.get("options", {})
-    return EstimationProblem(cm, _experiments(cfg), free,
+    # a model with sampled parts goes as it is: its input delays are applied to the data
+    # (see mechatron.estimation.delays)
+    target = model if cm.nr and not isinstance(model, mt.CompiledModel) else cm
+    return EstimationProblem(target, _experiments(cfg), free,
                              inputs=cfg.get("inputs", {}), outputs=cfg.get("outputs", {}),
                              fixed=fixed, offsets=cfg.get("offsets", []),
                              free_x0=cfg.get("free_x0", []),
