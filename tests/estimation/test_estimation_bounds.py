@@ -42,9 +42,13 @@ def test_a_gain_limited_by_its_bound_is_flagged_in_result_and_report(tmp_path, c
     assert res.to_dict()["at_bound"] == res.at_bound
 
     cfg = tmp_path / "capped.toml"
+    # [model] name takes database names only; the class comes in through a model file
+    (tmp_path / "rig.py").write_text(
+        "from mechatron.models.dc_motor_control import DCMotorSpeedPIVoltage\n")
     cfg.write_text("""
 [model]
-name = "mechatron.models.dc_motor_control:DCMotorSpeedPIVoltage"
+file = "rig.py"
+class = "DCMotorSpeedPIVoltage"
 [simulation]
 t_stop = 0.05
 points = 501

@@ -21,6 +21,7 @@ def run(capsys, *argv):
 def example(tmp_path):
     def copy(name):
         shutil.copy(EXAMPLES / name, tmp_path / name)
+        shutil.copy(EXAMPLES / "rigs.py", tmp_path / "rigs.py")   # its [model] file
         return tmp_path / name
     return copy
 

@@ -45,13 +45,17 @@ class Line(mt.Component):
 
 
 def test_intervals_and_correlation_equal_those_of_linear_regression():
+    """covariance="white" is the textbook covariance of ordinary least squares; the
+    default (HAC) one is reported beside it as ``ci95_white``."""
     rng = np.random.default_rng(3)
     t = np.linspace(0, 2, 60)
     y = 0.7 + 1.9 * t + 0.05 * rng.standard_normal(t.size)
     e = Experiment("line", t=t, outputs={"y": y})
     prob = EstimationProblem(Line(), [e], [FreeParameter("c", 1.0)], outputs={"y": "x"},
                              free_x0=["x"], jit=False)
-    out = estimate(prob)
+    out = estimate(prob, covariance="white")
+    hac = estimate(prob)
+    assert hac.ci95_white["c"] == pytest.approx(out.ci95["c"])
     # ordinary least squares by hand
     A = np.column_stack([t, np.ones_like(t)])
     coef, ssr, *_ = np.linalg.lstsq(A, y, rcond=None)

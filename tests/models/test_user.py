@@ -119,11 +119,14 @@ def test_problem_file_refuses_os_abort_and_accepts_a_user_file(tmp_path, capsys,
     cfg_path.write_text('[model]\nname = "os:abort"\n')
     code, out, err = run(capsys, "estimate", str(cfg_path))
     assert code == 2 and out == "" and err.count("\n") == 1
-    assert f"{cfg_path}: [model] name: os:abort: 'abort' is a function" in err
-    # a file relative to the problem file's folder, with parameters set
+    # [model] name takes database names only (issue 19): nothing is imported
+    assert f"{cfg_path}: [model] name: 'os:abort' is not a database model" in err
+    # a file relative to the problem file's folder ([model] file and class), with
+    # parameters set
     (tmp_path / "sub").mkdir()
     cfg_path = tmp_path / "sub" / "p.toml"
-    cfg_path.write_text('[model]\nname = "../rc_model.py:RC"\nset = { R = "2 kohm" }\n')
+    cfg_path.write_text('[model]\nfile = "../rc_model.py"\nclass = "RC"\n'
+                        'set = { R = "2 kohm" }\n')
     model = build_model(load_config(cfg_path))
     assert type(model).__name__ == "RC"
     import mechatron as mt

@@ -4,8 +4,10 @@
 * :mod:`.bench`: a virtual test bench with hidden true parameters.
 * :mod:`.classic`: the classic motor tests (locked rotor, time constants, friction).
 * :mod:`.discretize`: sampled trajectories with exact forward sensitivities.
-* :mod:`.estimate`: weighted least squares over several experiments, with confidence
-  intervals.
+* :mod:`.problem`: weighted least squares over several experiments, with confidence
+  intervals (:mod:`.uncertainty`: honest ones for correlated residuals).
+* :mod:`.validation`: the fitted model on other data (RMSE, fit %, residual
+  correlations), :mod:`.expressions`: measured outputs as expressions of variables.
 * :mod:`.sensitivity`: Monte Carlo sensitivity analysis.
 * :mod:`.optimize`: response optimization of controller gains with requirements.
 """
@@ -13,9 +15,10 @@
 from mechatron.estimation.data import Experiment, load_experiment
 from mechatron.estimation.problem import (EstimationProblem, EstimationResult,
                                            FreeParameter, estimate)
+from mechatron.estimation.validation import ValidationReport, validate
 
 __all__ = ["Experiment", "load_experiment", "EstimationProblem", "EstimationResult",
-           "FreeParameter", "estimate", "demo_run"]
+           "FreeParameter", "estimate", "validate", "ValidationReport", "demo_run"]
 
 
 def demo_run(out_dir) -> dict:

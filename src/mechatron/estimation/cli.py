@@ -1,4 +1,4 @@
-"""``mechatron estimate``, ``mechatron sensitivity`` and ``mechatron optimize``.
+"""``mechatron estimate``, ``validate``, ``sensitivity`` and ``optimize``.
 
 Each reads a TOML problem file (format: ``docs/estimation.md``), shows progress on stderr
 (a bar, or one line per step when stderr is not a terminal; ``--quiet`` silences it), and
@@ -9,7 +9,9 @@ plots and the full result as JSON.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import logging
 import sys
 import time
 from pathlib import Path
@@ -75,14 +77,26 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     prob = build_estimation(cfg)
     setup = time.perf_counter() - t0
     bar = Progress("estimate", enabled=not args.quiet)
-    res = estimate(prob, max_iterations=args.max_iterations,
-                   callback=lambda k, th, cost: bar.update(k, f"(iteration), cost {cost:.6g}"))
+    with _printed_here():
+        res = estimate(prob, max_iterations=args.max_iterations,
+                       covariance=args.covariance, profile=_profile_arg(args.profile),
+                       callback=lambda k, th, cost: bar.update(
+                           k, f"(iteration), cost {cost:.6g}"))
     bar.close()
     doc = res.to_dict()
     doc["setup_s"] = setup
     doc["config"] = str(args.config)
-    files = _save(out, doc, {"estimate_fit.png": res.plot_fit,
-                             "estimate_trajectory.png": res.plot_trajectory}, "estimate")
+    reports = []
+    if out is not None:
+        reports = _validation_reports(cfg, res, prob, ())
+        doc["validation"] = {rep.label: rep.to_dict() for rep in reports}
+    plots = {"estimate_fit.png": res.plot_fit,
+             "estimate_trajectory.png": res.plot_trajectory}
+    plots.update({f"{rep.label}_residuals.png": rep.plot for rep in reports})
+    files = _save(out, doc, plots, "estimate")
+    if out is not None:
+        files.append(_html(out / "estimate_report.html", res, reports, cfg, args))
+        doc["files"].append(str(files[-1]))
     if args.json:
         emit_json(doc)
         return 0
@@ -113,9 +127,124 @@ def cmd_estimate(args: argparse.Namespace) -> int:
               if abs(res.correlation[a, b]) > 0.9]
     if strong:
         emit("  strongly correlated: " + ", ".join(f"{a}/{b} {c:+.3f}" for a, b, c in strong))
+    if res.profile_ci95:
+        emit("  profile-likelihood 95% intervals: " + "; ".join(
+            f"{k} [{lo:.6g}, {hi:.6g}]" for k, (lo, hi) in res.profile_ci95.items()))
+    for w in res.warnings:
+        emit(f"  ! {w}")
+    for rep in reports:
+        emit(f"  {rep.label} data:")
+        emit(rep.summary())
     for f in files:
         emit(f"  wrote {f}")
     return 0
+
+
+class _Drop(logging.Filter):
+    def filter(self, record) -> bool:
+        return False
+
+
+@contextlib.contextmanager
+def _printed_here():
+    """Hold back the estimator's warnings (correlated residuals, parameters at bounds or
+    poorly identified): the command prints them in its summary and JSON."""
+    logger = logging.getLogger("mechatron.estimation.problem")
+    drop = _Drop()
+    logger.addFilter(drop)
+    try:
+        yield
+    finally:
+        logger.removeFilter(drop)
+
+
+def _profile_arg(value):
+    if not value:
+        return ()
+    return True if value == ["all"] else [v for item in value for v in item.split(",")]
+
+
+def _validation_reports(cfg, res, prob, data) -> list:
+    """The figures of the estimation data and of the validation data (``data`` files, or
+    ``[[validation]]`` of the problem file), when there are any."""
+    from mechatron.estimation.config import per_experiment, validation_experiments
+    from mechatron.estimation.validation import validate
+    reports = [validate(res, problem=prob)]
+    exps = validation_experiments(cfg, data)
+    if exps:
+        reports.append(validate(res, exps, problem=prob,
+                                per_experiment=per_experiment(cfg, "validation", data)))
+    return reports
+
+
+def _html(path: Path, res, reports, cfg, args) -> Path:
+    from mechatron.estimation.validation import write_html_report
+    return write_html_report(path, res, reports,
+                             {rep.label: path.parent / f"{rep.label}_residuals.png"
+                              for rep in reports},
+                             title=str(cfg.get("title", args.config)))
+
+
+# ---------------------------------------------------------------------------- validate
+def cmd_validate(args: argparse.Namespace) -> int:
+    from mechatron.estimation.config import build_estimation, load_config
+    from mechatron.estimation.problem import estimate
+    cfg = load_config(args.config)
+    out = _out_dir(args.out)
+    if not args.data and not cfg.get("validation"):
+        raise CommandError(f"{args.config}: nothing to validate on; give --data FILE.csv "
+                           "or a [[validation]] table in the problem file.")
+    prob = build_estimation(cfg)
+    res = None
+    if args.fit:
+        values = _read_fit(args.fit)
+    else:
+        bar = Progress("estimate", enabled=not args.quiet)
+        with _printed_here():
+            res = estimate(prob, max_iterations=args.max_iterations,
+                           callback=lambda k, th, cost: bar.update(
+                               k, f"(iteration), cost {cost:.6g}"))
+        bar.close()
+        values = res.parameters
+    from mechatron.estimation.validation import validate
+    reports = [validate(values, problem=prob)]
+    from mechatron.estimation.config import per_experiment, validation_experiments
+    reports.append(validate(values, validation_experiments(cfg, args.data or ()),
+                            problem=prob,
+                            per_experiment=per_experiment(cfg, "validation", args.data)))
+    doc = {"config": str(args.config), "parameters": values,
+           "validation": {rep.label: rep.to_dict() for rep in reports}}
+    files = _save(out, doc, {f"{rep.label}_residuals.png": rep.plot for rep in reports},
+                  "validate")
+    if out is not None and res is not None:
+        files.append(_html(out / "validate_report.html", res, reports, cfg, args))
+        doc["files"].append(str(files[-1]))
+    if args.json:
+        emit_json(doc)
+        return 0
+    emit(f"{cfg.get('title', args.config)}")
+    for rep in reports:
+        emit(f"  {rep.label} data" + (f" (fitted again: {', '.join(rep.refitted)})"
+                                      if rep.refitted else "") + ":")
+        emit(rep.summary())
+    for f in files:
+        emit(f"  wrote {f}")
+    return 0
+
+
+def _read_fit(path: str) -> dict:
+    p = Path(path)
+    try:
+        doc = json.loads(p.read_text())
+        values = doc["parameters"]
+        if not isinstance(values, dict):
+            raise TypeError
+        return {k: float(v) for k, v in values.items()}
+    except FileNotFoundError:
+        raise CommandError(f"--fit {p}: no such file.") from None
+    except (ValueError, KeyError, TypeError):
+        raise CommandError(f"--fit {p}: not the estimate.json of `mechatron estimate "
+                           "--out` (no 'parameters' table of numbers).") from None
 
 
 def _bound_note(hit: dict | None) -> str:
@@ -257,7 +386,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------------------ parser
 def add_commands(sub) -> None:
-    """Add ``estimate``, ``sensitivity`` and ``optimize`` to the ``mechatron`` parser."""
+    """Add ``estimate``, ``validate``, ``sensitivity`` and ``optimize`` to the
+    ``mechatron`` parser."""
     p = sub.add_parser("estimate", help="estimate parameters from measured data",
                        description="Weighted least-squares estimation of model parameters "
                                    "from one or more measured experiments, with exact "
@@ -268,9 +398,36 @@ def add_commands(sub) -> None:
     p.add_argument("--out", metavar="DIR", help="write plots and the result as JSON here")
     p.add_argument("--max-iterations", type=int, default=100, metavar="N",
                    help="limit on solver iterations (default: %(default)s)")
+    p.add_argument("--covariance", choices=("hac", "white"), default="hac",
+                   help="interval covariance: hac (Newey-West, for correlated residuals; "
+                        "default) or white (independent errors only)")
+    p.add_argument("--profile", action="append", metavar="NAME[,NAME]",
+                   help="also compute profile-likelihood intervals of these parameters "
+                        "('all' for every one)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_json(p)
     p.set_defaults(func=cmd_estimate)
+
+    p = sub.add_parser("validate", help="check a fitted model on other data",
+                       description="Simulate the fitted model on another data set and "
+                                   "report RMSE, NRMSE fit %%, the residuals' "
+                                   "autocorrelation and their cross-correlation with the "
+                                   "input, with plots. The fit is made from the problem "
+                                   "file (or read with --fit); the data are --data files "
+                                   "(read like the first [[experiments]] entry) or the "
+                                   "file's [[validation]] tables.")
+    p.add_argument("config", metavar="FILE.toml", help="problem file")
+    p.add_argument("--data", action="append", metavar="FILE.csv",
+                   help="validation data (repeatable)")
+    p.add_argument("--fit", metavar="estimate.json",
+                   help="fitted values from `mechatron estimate --out` (default: fit now)")
+    p.add_argument("--out", metavar="DIR",
+                   help="write plots, the result as JSON and an HTML report here")
+    p.add_argument("--max-iterations", type=int, default=100, metavar="N",
+                   help="limit on solver iterations of the fit (default: %(default)s)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_json(p)
+    p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("sensitivity", help="Monte Carlo sensitivity of parameters",
                        description="Sample parameter distributions, simulate every sample "

@@ -19,13 +19,17 @@ from mechatron.estimation.data import Experiment, load_experiment
 from mechatron.units import to_base, to_si
 
 __all__ = ["load_config", "build_model", "build_estimation", "build_sensitivity",
-           "build_response", "generate_bench_data"]
+           "build_response", "generate_bench_data", "validation_experiments",
+           "per_experiment"]
 
 log = logging.getLogger(__name__)
 
 _TOP = {"model", "experiments", "parameters", "fixed", "offsets", "free_x0",
         "virtual_bench", "options", "sensitivity", "requirements", "design", "simulation",
-        "inputs", "outputs", "title"}
+        "inputs", "outputs", "title", "validation"}
+#: Keys of an ``[[experiments]]`` (and ``[[validation]]``) table.
+_EXPERIMENT_KEYS = ("name", "file", "time", "inputs", "outputs", "units", "params", "x0",
+                    "hold", "sigma", "rows", "t_range", "params_free", "fit")
 
 #: Keys of each ``[[requirements]]`` type, with the check of each value.
 _REQUIREMENT_KEYS = {
@@ -184,9 +188,16 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
             c.names(key, cfg[key])
 
     model = cfg.get("model", {})
-    if c.keys("[model]", model, ("name", "variant", "set"), required=("name",)):
-        if "name" in model:
-            c.text("[model] name", model["name"])
+    if c.keys("[model]", model, ("name", "file", "class", "variant", "set")):
+        if ("name" in model) == ("file" in model):
+            c.add("[model]", "give either 'name' (a database model, see `mechatron "
+                             "models`) or 'file' (a Python file, with 'class' when it "
+                             "defines several)" + (", not both" if "name" in model else ""))
+        for key in ("name", "file", "class"):
+            if key in model:
+                c.text(f"[model] {key}", model[key])
+        if "class" in model and "file" not in model:
+            c.add("[model] class", "needs 'file', the Python file that defines it")
         if "variant" in model:
             c.text("[model] variant", model["variant"])
         if "set" in model:
@@ -204,44 +215,8 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
             for run, file in runs.items():
                 c.text(f"[virtual_bench] runs.{run}", file)
 
-    experiments = cfg.get("experiments", [])
-    if not isinstance(experiments, list):
-        c.add("[[experiments]]", "expected an array of tables ([[experiments]]), got "
-                                 f"{_show(experiments)}")
-        experiments = []
-    for k, exp in enumerate(experiments, 1):
-        where = f"[[experiments]] {k}" + (f" ({exp['name']})" if isinstance(exp, dict)
-                                          and isinstance(exp.get("name"), str) else "")
-        if not c.keys(where, exp, ("name", "file", "time", "inputs", "outputs", "units",
-                                   "params", "x0", "hold", "sigma", "fit"),
-                      required=("file",)):
-            continue
-        if "fit" in exp and not isinstance(exp["fit"], bool):
-            c.add(f"{where} fit", f"expected true or false, got {_show(exp['fit'])}")
-        for key in ("name", "file", "time"):
-            if key in exp:
-                c.text(f"{where} {key}", exp[key])
-        for key in ("inputs", "outputs"):
-            if key in exp:
-                c.names(f"{where} {key}", exp[key], mapping_ok=True)
-        if "hold" in exp:
-            c.text(f"{where} hold", exp["hold"], ("zoh", "linear"))
-        if "units" in exp and c.keys(f"{where} units", exp["units"],
-                                     exp["units"] if isinstance(exp["units"], dict) else ()):
-            for label, unit in exp["units"].items():
-                c.text(f"{where} units.{label}", unit)
-        for key in ("params", "x0"):
-            if key in exp:
-                c.values(f"{where} {key}", exp[key])
-        if "sigma" in exp and isinstance(exp["sigma"], dict):
-            outputs = exp.get("outputs", [])
-            for label, value in exp["sigma"].items():
-                c.number(f"{where} sigma.{label}", value, positive=True)
-                if isinstance(outputs, (list, dict)) and outputs and label not in outputs:
-                    c.add(f"{where} sigma.{label}", f"'{label}' is not an output of this "
-                          f"experiment ({', '.join(outputs)})")
-        elif "sigma" in exp:
-            c.add(f"{where} sigma", f"expected a table, got {_show(exp['sigma'])}")
+    for table in ("experiments", "validation"):
+        _check_experiments(c, table, cfg.get(table, []))
 
     for table in ("inputs", "outputs"):
         if table in cfg and c.keys(f"[{table}]", cfg[table], cfg[table]
@@ -305,6 +280,61 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
     return [f"{path}: {p}" for p in c.problems]
 
 
+def _check_experiments(c: _Checks, table: str, experiments) -> None:
+    """``[[experiments]]`` or ``[[validation]]``: data files and how they bind."""
+    if not isinstance(experiments, list):
+        c.add(f"[[{table}]]", f"expected an array of tables ([[{table}]]), got "
+                              f"{_show(experiments)}")
+        return
+    for k, exp in enumerate(experiments, 1):
+        where = f"[[{table}]] {k}" + (f" ({exp['name']})" if isinstance(exp, dict)
+                                      and isinstance(exp.get("name"), str) else "")
+        if not c.keys(where, exp, _EXPERIMENT_KEYS, required=("file",)):
+            continue
+        if "fit" in exp and (table != "experiments" or not isinstance(exp["fit"], bool)):
+            c.add(f"{where} fit", f"expected true or false in [[experiments]], got "
+                                  f"{_show(exp['fit'])}")
+        for key in ("name", "file", "time"):
+            if key in exp:
+                c.text(f"{where} {key}", exp[key])
+        for key in ("inputs", "outputs"):
+            if key in exp:
+                c.names(f"{where} {key}", exp[key], mapping_ok=True)
+        if "hold" in exp:
+            c.text(f"{where} hold", exp["hold"], ("zoh", "linear"))
+        if "units" in exp and c.keys(f"{where} units", exp["units"],
+                                     exp["units"] if isinstance(exp["units"], dict) else ()):
+            for label, unit in exp["units"].items():
+                c.text(f"{where} units.{label}", unit)
+        for key in ("params", "x0"):
+            if key in exp:
+                c.values(f"{where} {key}", exp[key])
+        if "sigma" in exp and isinstance(exp["sigma"], dict):
+            outputs = exp.get("outputs", [])
+            for label, value in exp["sigma"].items():
+                c.number(f"{where} sigma.{label}", value, positive=True)
+                if isinstance(outputs, (list, dict)) and outputs and label not in outputs:
+                    c.add(f"{where} sigma.{label}", f"'{label}' is not an output of this "
+                          f"experiment ({', '.join(outputs)})")
+        elif "sigma" in exp:
+            c.add(f"{where} sigma", f"expected a table, got {_show(exp['sigma'])}")
+
+        for key, whole in (("rows", True), ("t_range", False)):
+            if key not in exp:
+                continue
+            v = exp[key]
+            if not (isinstance(v, list) and 1 <= len(v) <= 2):
+                c.add(f"{where} {key}", f"expected [start, stop] or [start], got {_show(v)}")
+                continue
+            vals = [c.number(f"{where} {key}", x, integer=whole) for x in v]
+            same_sign = not whole or (vals[0] >= 0) == (vals[1] >= 0) \
+                if len(vals) == 2 and None not in vals else False
+            if same_sign and not vals[0] < vals[1]:
+                c.add(f"{where} {key}", f"start {v[0]!r} is not below stop {v[1]!r}")
+        if "params_free" in exp:
+            c.names(f"{where} params_free", exp["params_free"])
+
+
 def _check_distribution(c: _Checks, where: str, d) -> None:
     if not isinstance(d, dict):
         c.add(where, f"expected a table such as {{ kind = \"uniform\", low = 5, high = 10 }}"
@@ -357,57 +387,103 @@ def _check_requirement(c: _Checks, where: str, req) -> None:
 
 
 def build_model(cfg: dict):
-    """The model named by ``[model] name``: a database entry (``"dc_motor"``, with
-    optional ``variant`` and ``set``), a user's file (``"motor.py"`` or
-    ``"motor.py:ClassName"``, relative to the problem file) or ``"package.module:Class"``;
-    a class must be a concrete :class:`~mechatron.Component` subclass, checked before it
-    is called (see :mod:`mechatron.models.user`). ``set`` gives parameter values."""
-    from mechatron.models.user import component_class
+    """The model of ``[model]``: ``name``, a database entry (``"dc_motor"``, with
+    optional ``variant``), or ``file``, a Python file of the user's relative to the
+    problem file, with ``class`` naming the :class:`~mechatron.Component` subclass when
+    the file defines several (see :mod:`mechatron.models.user`); ``set`` gives parameter
+    values. ``name`` accepts database names only: nothing is imported from the import
+    path, so a problem file cannot run ``os:abort``."""
+    from mechatron.models.user import load_model_file
     where = cfg.get("_path", "config")
     spec = cfg.get("model", {})
-    name = spec.get("name")
+    name, file = spec.get("name"), spec.get("file")
+    if file:
+        if "variant" in spec:
+            raise DataError(f"{where}: [model] variant: a model file has no variants; "
+                            "remove the key.", path=where)
+        target = f"{file}:{spec['class']}" if spec.get("class") else file
+        try:
+            cls = load_model_file(target, base=cfg.get("_dir"))
+        except ModelError as exc:
+            raise ModelError(f"{where}: [model] file: {exc}", path=where) from None
+        return cls(**spec.get("set", {}))
     if not name:
-        raise DataError(f"{where}: [model] needs a 'name': a database entry (see "
-                        "`mechatron models`), a file 'model.py[:Class]' or "
-                        "'package.module:Class'.", path=where)
-    try:
-        cls = component_class(name, base=cfg.get("_dir"))
-    except ModelError as exc:
-        raise ModelError(f"{where}: [model] name: {exc}", path=where) from None
-    if cls is None:
-        entry = mt.models.get(name)
-        return entry.build(spec.get("variant"), **spec.get("set", {}))
-    if "variant" in spec:
-        raise DataError(f"{where}: [model] variant: '{name}' is a class, which has no "
-                        "variants; remove the key.", path=where)
-    return cls(**spec.get("set", {}))
+        raise DataError(f"{where}: [model] needs 'name' (a database entry, see "
+                        "`mechatron models`) or 'file' (a Python file, with 'class').",
+                        path=where)
+    known = [e.name for e in mt.models.list()]
+    if name not in known:
+        hint = ("Give a file as file = \"model.py\" (and class = \"Name\")"
+                if name.endswith(".py") or ".py:" in name or ":" in name else
+                f"Known: {', '.join(sorted(known))}")
+        raise ModelError(f"{where}: [model] name: '{name}' is not a database model; name "
+                         f"accepts database names only. {hint}.", path=where)
+    entry = mt.models.get(name)
+    return entry.build(spec.get("variant"), **spec.get("set", {}))
 
 
 def _value(raw, unit: str, where: str) -> float:
     return float(to_si(raw, unit, where))
 
 
-def _experiments(cfg: dict, fit: bool = True) -> list[Experiment]:
-    """The experiments to fit (``fit`` true, the default of each) or, with ``fit=False``,
-    those marked ``fit = false``: simulated after the fit for validation only."""
+def _experiments(cfg: dict, table: str = "experiments") -> list[Experiment]:
+    """The experiments of ``[[experiments]]`` to fit, each cut to its ``rows`` or
+    ``t_range``; with ``table="validation"``, those of ``[[validation]]`` and the
+    ``[[experiments]]`` marked ``fit = false`` (simulated with the estimates, not fitted)."""
     base = Path(cfg["_dir"])
     out = []
-    for k, spec in enumerate(cfg.get("experiments", [])):
+    for k, spec in enumerate(cfg.get(table, [])):
         if "file" not in spec:
-            raise DataError(f"{cfg['_path']}: [[experiments]] number {k + 1} has no 'file'.")
-        if spec.get("fit", True) != fit:
+            raise DataError(f"{cfg['_path']}: [[{table}]] number {k + 1} has no 'file'.")
+        if table == "experiments" and spec.get("fit", True) is False:
             continue
-        path = base / spec["file"]
-        exp = load_experiment(path, time=spec.get("time", "t"),
-                              inputs=spec.get("inputs", []), outputs=spec.get("outputs", []),
-                              units=spec.get("units"), name=spec.get("name"),
-                              params=dict(spec.get("params", {})),
-                              x0=dict(spec.get("x0", {})), hold=spec.get("hold", "zoh"),
-                              sigma=dict(spec.get("sigma", {})))
-        out.append(exp)
-    if not out and fit:
-        raise DataError(f"{cfg['_path']}: no [[experiments]] to fit; give at least one data "
-                        "file (without fit = false).")
+        out.append(_load(base / spec["file"], spec))
+    if table == "validation":
+        out += [_load(base / spec["file"], spec) for spec in cfg.get("experiments", [])
+                if spec.get("fit", True) is False]
+    if not out and table == "experiments":
+        raise DataError(f"{cfg['_path']}: no [[experiments]] to fit; give at least one data file (without fit = false).")
+    return out
+
+
+def _load(path, spec: dict) -> Experiment:
+    exp = load_experiment(path, time=spec.get("time", "t"),
+                          inputs=spec.get("inputs", []), outputs=spec.get("outputs", []),
+                          units=spec.get("units"), name=spec.get("name"),
+                          params=dict(spec.get("params", {})),
+                          x0=dict(spec.get("x0", {})), hold=spec.get("hold", "zoh"),
+                          sigma=dict(spec.get("sigma", {})))
+    if "rows" in spec or "t_range" in spec:
+        pad = [None, None]
+        exp = exp.select(rows=(list(spec["rows"]) + pad)[:2] if "rows" in spec else None,
+                         t_range=(list(spec["t_range"]) + pad)[:2]
+                         if "t_range" in spec else None)
+    return exp
+
+
+def validation_experiments(cfg: dict, data=()) -> list[Experiment]:
+    """The validation data: the files ``data`` read with the column mapping of the first
+    ``[[experiments]]`` entry (its ``rows``/``t_range`` dropped), or else
+    ``[[validation]]``."""
+    if data:
+        spec = {k: v for k, v in cfg["experiments"][0].items()
+                if k not in ("rows", "t_range", "name", "file")}
+        return [_load(Path(f), dict(spec, name=Path(f).stem)) for f in data]
+    return _experiments(cfg, "validation")
+
+
+def per_experiment(cfg: dict, table: str = "experiments", data=()) -> dict:
+    """``{experiment name: [parameter, ...]}`` from ``params_free`` of each entry; for
+    the files ``data`` (see :func:`validation_experiments`), those of the first
+    ``[[experiments]]`` entry."""
+    if data:
+        free = list(cfg["experiments"][0].get("params_free", []))
+        return {Path(f).stem: free for f in data} if free else {}
+    out = {}
+    for k, spec in enumerate(cfg.get(table, [])):
+        if spec.get("params_free"):
+            name = spec.get("name") or Path(spec["file"]).stem
+            out[name] = list(spec["params_free"])
     return out
 
 
@@ -465,13 +541,17 @@ def build_estimation(cfg: dict, *, model=None):
     fixed = {name: _value(v, units.get(name, ""), name)
              for name, v in cfg.get("fixed", {}).items()}
     opts = cfg.get("options", {})
-    return EstimationProblem(cm, _experiments(cfg), free,
+    # a model with sampled parts goes as it is: its input delays are applied to the data
+    # (see mechatron.estimation.delays)
+    target = model if cm.nr and not isinstance(model, mt.CompiledModel) else cm
+    return EstimationProblem(target, _experiments(cfg), free,
                              inputs=cfg.get("inputs", {}), outputs=cfg.get("outputs", {}),
                              fixed=fixed, offsets=cfg.get("offsets", []),
                              free_x0=cfg.get("free_x0", []),
+                             per_experiment=per_experiment(cfg),
                              substeps=opts.get("substeps"),
                              jit=opts.get("jit", "auto"), smooth=opts.get("smooth"),
-                             validation=_experiments(cfg, fit=False))
+                             validation=_experiments(cfg, "validation"))
 
 
 def build_sensitivity(cfg: dict):

@@ -148,6 +148,39 @@ class Experiment:
         if problems:
             raise DataError(" ".join(problems), problems=problems, path=self.source)
 
+    def select(self, rows=None, t_range=None, *, name: str | None = None) -> "Experiment":
+        """The samples of a row range and/or a time range, as a new experiment (the times
+        stay as measured; messages keep the file's row numbers).
+
+        ``rows = (start, stop)`` counts data rows from 0, ``stop`` excluded (as a Python
+        slice; either may be None, a negative number counts from the end);
+        ``t_range = (t0, t1)`` keeps ``t0 <= t <= t1`` (s). Fit on the first 400 rows and
+        validate on the rest: ``select(rows=(0, 400))`` and ``select(rows=(400, None))``.
+        """
+        keep = np.ones(self.n, dtype=bool)
+        what = []
+        if rows is not None:
+            start, stop = (list(rows) + [None, None])[:2]
+            idx = np.zeros(self.n, dtype=bool)
+            idx[slice(start, stop)] = True
+            keep &= idx
+            what.append(f"rows {start}:{stop}")
+        if t_range is not None:
+            t0, t1 = t_range
+            keep &= (self.t >= (-math.inf if t0 is None else t0)) & \
+                (self.t <= (math.inf if t1 is None else t1))
+            what.append(f"t in [{t0}, {t1}] s")
+        if keep.sum() < 2:
+            raise DataError(f"{self.source}: experiment '{self.name}': {' and '.join(what)} "
+                            f"keep {int(keep.sum())} of {self.n} samples; at least 2 are "
+                            "needed. Check the range.", path=self.source)
+        return Experiment(name or self.name, t=self.t[keep],
+                          inputs={k: v[keep] for k, v in self.inputs.items()},
+                          outputs={k: v[keep] for k, v in self.outputs.items()},
+                          units=dict(self.units), params=dict(self.params),
+                          x0=dict(self.x0), hold=self.hold, sigma=dict(self.sigma),
+                          source=self.source, rows=self.rows[keep])
+
     # ------------------------------------------------------------------------------------
     @property
     def n(self) -> int:

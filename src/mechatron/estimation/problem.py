@@ -25,10 +25,15 @@ full Gauss-Newton step can jump to a bound and into another valley). With
 Uncertainty
 -----------
 With ``J`` the Jacobian at the optimum, ``n`` residuals and ``q`` free parameters, the
-covariance is ``C = s^2 (J^T J)^-1`` with ``s^2 = S / (n - q)``; the 95% interval of
-``theta_i`` is ``theta_i -/+ t_{0.975, n-q} sqrt(C_ii)``; the correlation matrix is
-``C_ij / sqrt(C_ii C_jj)``. These are the usual linearized (asymptotic) intervals; they
-assume white measurement errors and a model that can describe the data.
+white-noise covariance is ``C = s^2 (J^T J)^-1`` with ``s^2 = S / (n - q)`` and the 95%
+interval ``theta_i -/+ t_{0.975, n-q} sqrt(C_ii)``. Residuals of dynamic models are
+rarely white, so by default (``covariance="hac"``) the covariance is the Newey-West
+sandwich with a Bartlett lag window and the interval uses the fixed-b critical value
+(:mod:`.uncertainty`, which also says why not a bootstrap); both are reported. The
+correlation matrix is ``C_ij / sqrt(C_ii C_jj)``. Correlated residuals and poorly
+identified parameters (with their correlation partners) are warned about
+(``result.warnings``); profile-likelihood intervals are computed on request. All assume
+a model that can describe the data.
 
 Fit
 ---
@@ -53,7 +58,11 @@ from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import DataError, ParameterError
 from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.data import unit_factor
+from mechatron.estimation.delays import prepare_delays, shift
+from mechatron.estimation.expressions import parse_output
 from mechatron.estimation.native import compiler
+from mechatron.estimation.uncertainty import (RHO_WARN, acf, bartlett_critical, diagnose,
+                                              hac_covariance, profile_interval)
 from mechatron.estimation.discretize import (Trajectory, check_model, choose_substeps,
                                              fastest_time_constant)
 
@@ -119,6 +128,15 @@ class EstimationProblem:
         Outputs that get an estimated constant sensor offset (shared by the experiments).
     free_x0 : list of state names
         Initial states estimated per experiment.
+    input_delays : dict label -> float
+        Transport delays (s) of measured inputs: the data are shifted (see
+        :mod:`.delays`). A :class:`~mechatron.library.blocks.Delay` block on a measured
+        input of ``model`` adds its delay here by itself.
+    per_experiment : dict experiment name -> list of str, dict or FreeParameter
+        Parameters estimated separately for each experiment named (an initial position
+        or a sensor offset per run), next to the shared ``free`` ones; the decision
+        variable is ``"<experiment>:<parameter>"``. The start value defaults to the
+        experiment's ``params``, then to ``fixed`` and the model's value.
     substeps : int or None
         Radau substeps per sample; ``None`` chooses them from the fastest time constant at
         the starting values (at most ``max_substeps``).
@@ -134,14 +152,16 @@ class EstimationProblem:
     """
 
     def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
-                 offsets=(), free_x0=(), substeps=None, max_substeps: int = 400,
+                 offsets=(), free_x0=(), per_experiment=None, input_delays=None,
+                 substeps=None, max_substeps: int = 400,
                  step_ratio: float = 4.0, jit="auto", smooth=None, validation=()):
         for m in (substeps if isinstance(substeps, (list, tuple)) else [substeps]):
             if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer))
                                   or m < 1):
                 raise ParameterError(f"estimation: substeps must be a whole number >= 1 "
                                      f"(or None to choose them), got {substeps!r}.")
-        self.cm = compiled(model)
+        self.cm, found = prepare_delays(model, dict(inputs or {}))
+        self.input_delays = {**found, **dict(input_delays or {})}
         check_model(self.cm, "estimation")
         cm = self.cm
         self.experiments = list(experiments)
@@ -153,11 +173,15 @@ class EstimationProblem:
         self.fixed = dict(fixed or {})
         self.offsets = list(offsets)
         self.free_x0 = list(free_x0)
+        self.per_experiment = {k: [_as_free(f) for f in v]
+                               for k, v in dict(per_experiment or {}).items()}
         self.jit = jit
         self.smooth = smooth
         self.validation = list(validation)
         self._init = dict(inputs=self.inputs, outputs=self.outputs, fixed=self.fixed,
                           offsets=self.offsets, free_x0=self.free_x0,
+                          per_experiment=self.per_experiment,
+                          input_delays=self.input_delays,
                           max_substeps=max_substeps, step_ratio=step_ratio, jit=jit,
                           smooth=smooth)
         pindex = {n: i for i, n in enumerate(cm.param_names)}
@@ -170,15 +194,34 @@ class EstimationProblem:
             if path not in pindex:
                 problems.append(f"input '{lab}' drives '{path}', which is not a parameter "
                                 f"of model '{cm.name}'.")
-        self._outspec = {lab: _parse_output(spec) for lab, spec in self.outputs.items()}
-        for lab, (path, _kind) in self._outspec.items():
-            if path not in cm.names:
-                problems.append(f"output '{lab}' is compared with '{path}', which the "
-                                f"model '{cm.name}' does not log.")
+        self._outspec = {}
+        for lab, spec in self.outputs.items():
+            try:
+                self._outspec[lab] = parse_output(spec, cm.names, f"output '{lab}'")
+            except DataError as exc:
+                problems.append(str(exc).replace("the model does not log",
+                                                 f"the model '{cm.name}' does not log"))
         for s in self.free_x0:
             if s not in cm.state_names:
                 problems.append(f"free initial state '{s}' is not a state of '{cm.name}' "
                                 f"(states: {', '.join(cm.state_names)}).")
+        exp_names = [e.name for e in self.experiments]
+        shared = {f.name for f in self.free}
+        for ename, fs in self.per_experiment.items():
+            if ename not in exp_names:
+                problems.append(f"per-experiment parameters for '{ename}', which is not "
+                                f"an experiment (experiments: {', '.join(exp_names)}).")
+            elif exp_names.count(ename) > 1:
+                problems.append(f"per-experiment parameters for '{ename}': "
+                                f"{exp_names.count(ename)} experiments have that name; "
+                                "name them apart.")
+            for f in fs:
+                if f.name not in pindex:
+                    problems.append(f"experiment '{ename}': free parameter '{f.name}' is "
+                                    f"not a parameter of model '{cm.name}'.")
+                elif f.name in shared:
+                    problems.append(f"experiment '{ename}': '{f.name}' is free both per "
+                                    "experiment and shared; choose one.")
         for lab in self.offsets:
             if lab not in self.outputs:
                 problems.append(f"offset for '{lab}', which is not a measured output.")
@@ -200,9 +243,26 @@ class EstimationProblem:
                                      path=f.name)
             if f.scale is None:
                 f.scale = abs(f.initial) or 1.0
-        # the decision vector: parameters, offsets, per-experiment initial states
+        for e in self.experiments:
+            for f in self.per_experiment.get(e.name, []):
+                i = pindex[f.name]
+                if f.initial is None:
+                    f.initial = float(e.params.get(f.name, self.base[i]))
+                lo, hi = cm.param_bounds[i] if cm.param_bounds else (None, None)
+                f.min = max(f.min, lo) if lo is not None else f.min
+                f.max = min(f.max, hi) if hi is not None else f.max
+                if not (f.min <= f.initial <= f.max):
+                    raise ParameterError(f"experiment '{e.name}': free parameter "
+                                         f"'{f.name}': starting value {f.initial:g} is "
+                                         f"outside [{f.min:g}, {f.max:g}].", path=f.name)
+                if f.scale is None:
+                    f.scale = abs(f.initial) or 1.0
+        # the decision vector: parameters, offsets, per-experiment initial states and
+        # parameters
         self.names = [f.name for f in self.free] + [f"offset:{lab}" for lab in self.offsets]
         self.names += [f"{e.name}:{s}" for e in self.experiments for s in self.free_x0]
+        self.names += [f"{e.name}:{f.name}" for e in self.experiments
+                       for f in self.per_experiment.get(e.name, [])]
         self._bind(substeps, max_substeps, step_ratio)
 
     # ------------------------------------------------------------------------------------
@@ -237,6 +297,13 @@ class EstimationProblem:
                 continue
             U = np.array([e.inputs[lab] * f for lab, f in zip(in_labels, fin)]).reshape(
                 len(in_labels), e.n)
+            try:
+                for j, lab in enumerate(in_labels):
+                    if lab in self.input_delays:
+                        U[j] = shift(U[j], e.t, self.input_delays[lab], e.where(lab))
+            except DataError as exc:
+                problems.append(str(exc))
+                continue
             Ym = np.array([e.outputs[lab] * f for lab, f in zip(out_labels, fout)])
             sig = []
             for lab, f, y in zip(out_labels, fout, Ym):
@@ -266,8 +333,10 @@ class EstimationProblem:
                 except DataError as exc:
                     problems.append(str(exc))
                     continue
+            paths = list(dict.fromkeys(p for lab in out_labels
+                                       for p in self._outspec[lab].paths))
             traj = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
-                              [cm.names.index(self._outspec[lab][0]) for lab in out_labels],
+                              [cm.names.index(p) for p in paths],
                               substeps=m, hold=e.hold, jit=self._use_jit(e.n * m),
                               smooth=self.smooth)
             try:
@@ -275,9 +344,10 @@ class EstimationProblem:
             except DataError as exc:
                 problems.append(f"{e.source}: experiment '{e.name}': {exc}")
                 continue
+            rows = [[paths.index(p) for p in self._outspec[lab].paths] for lab in out_labels]
             self.bound.append(dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), p=pe, x0=x0,
                                    traj=traj, out_labels=out_labels, substeps=m,
-                                   in_labels=in_labels))
+                                   out_rows=rows, in_labels=in_labels))
         if problems:
             raise DataError(" ".join(problems), problems=problems)
         self._build_residual()
@@ -290,9 +360,29 @@ class EstimationProblem:
         return bool(self.jit)
 
     def _output_unit(self, lab: str) -> str:
-        path, kind = self._outspec[lab]
-        unit = self.cm.units[self.cm.names.index(path)]
-        return f"({unit})/s" if kind == "rate" else unit
+        spec = self._outspec[lab]
+        unit = spec.unit(dict(zip(self.cm.names, self.cm.units)))
+        return f"({unit or '1'})/s" if spec.kind == "rate" else unit
+
+    def _label_output(self, b, r: int, Y, dY=None):
+        """Model output ``r`` of experiment ``b`` (its expression of the simulated
+        variables) and, with their sensitivities ``dY``, its own ``(N, nq)``."""
+        spec = self._outspec[b["out_labels"][r]]
+        rows = b["out_rows"][r]
+        V = np.asarray(Y)[rows]
+        if spec.plain:
+            y = V[0]
+            dy = dY[rows[0]::Y.shape[0], :].T if dY is not None else None
+            return y, dy
+        f = spec.function.map(V.shape[1])
+        val, grad = f(V)
+        y = np.asarray(val).ravel()
+        if dY is None:
+            return y, None
+        grad = np.asarray(grad).reshape(V.shape[1], len(rows)) if len(rows) > 1 else \
+            np.asarray(grad).reshape(V.shape[1], 1)
+        dy = sum(grad[:, j:j + 1] * dY[i::Y.shape[0], :].T for j, i in enumerate(rows))
+        return y, dy
 
     def use_native(self) -> bool:
         """Compile every experiment's step functions to native code (for many
@@ -383,9 +473,30 @@ class EstimationProblem:
                 cols.append(k0)
                 k0 += 1
             b["D"], b["S0"], b["x0_cols"] = D, S0, cols
+        for b in self.bound:
+            b["pe_cols"] = []
+            for f in self.per_experiment.get(b["exp"].name, []):
+                b["D"][pindex[f.name], k0] = 1.0
+                b["pe_cols"].append((pindex[f.name], k0, f))
+                k0 += 1
         self.n_residuals = sum(
             sum(b["exp"].n - (self._outspec[lab][1] == "rate") for lab in b["out_labels"])
             for b in self.bound)
+
+    def residual_groups(self) -> list:
+        """Per experiment, ``(rows, sample index)`` of the residuals of each output (in
+        the order of :meth:`residuals`): the time structure for
+        :func:`~mechatron.estimation.uncertainty.hac_covariance`."""
+        out, k0 = [], 0
+        for b in self.bound:
+            segs = []
+            for lab in b["out_labels"]:
+                first = int(self._outspec[lab][1] == "rate")
+                m = b["exp"].n - first
+                segs.append((slice(k0, k0 + m), np.arange(first, first + m)))
+                k0 += m
+            out.append(segs)
+        return out
 
     def _point(self, b, theta):
         cm = self.cm
@@ -395,19 +506,19 @@ class EstimationProblem:
         x0 = b["x0"].copy()
         for s, c in zip(self.free_x0, b["x0_cols"]):
             x0[cm.state_names.index(s)] = theta[c]
+        for i, c, _f in b["pe_cols"]:
+            p[i] = theta[c]
         return p, x0
 
     def _assemble(self, b, theta, Y, dY=None):
         """Weighted residuals (and their Jacobian) of one experiment from its outputs."""
         nf = len(self.free)
         nq = len(self.names)
-        n_out = len(b["out_labels"])
         r_parts, j_parts = [], []
         dt = np.diff(b["exp"].t)
         for r, lab in enumerate(b["out_labels"]):
-            y = Y[r]
+            y, dy = self._label_output(b, r, Y, dY)                 # (N,), (N, nq)
             ym = b["Ym"][r]
-            dy = dY[r::n_out, :].T if dY is not None else None      # (N, nq)
             if self._outspec[lab][1] == "rate":
                 y = np.diff(y) / dt
                 ym = ym[1:]
@@ -457,6 +568,8 @@ class EstimationProblem:
         for b in self.bound:
             for s in self.free_x0:
                 vals.append(b["x0"][self.cm.state_names.index(s)])
+        for b in self.bound:
+            vals += [f.initial for _i, _c, f in b["pe_cols"]]
         return np.array(vals, dtype=float)
 
     @property
@@ -466,13 +579,16 @@ class EstimationProblem:
             b = next(b for b in self.bound if lab in b["out_labels"]) if getattr(
                 self, "bound", None) else None
             out.append(float(b["sigma"][b["out_labels"].index(lab)]) if b else 1.0)
-        out += [1.0] * (len(self.names) - len(out))
+        pe = [f.scale for b in getattr(self, "bound", []) for _i, _c, f in b["pe_cols"]]
+        out += [1.0] * (len(self.names) - len(out) - len(pe)) + pe
         return out
 
     @property
     def bounds(self):
-        lo = [f.min for f in self.free] + [-math.inf] * (len(self.names) - len(self.free))
-        hi = [f.max for f in self.free] + [math.inf] * (len(self.names) - len(self.free))
+        pe = [f for b in self.bound for _i, _c, f in b["pe_cols"]]
+        rest = len(self.names) - len(self.free) - len(pe)
+        lo = [f.min for f in self.free] + [-math.inf] * rest + [f.min for f in pe]
+        hi = [f.max for f in self.free] + [math.inf] * rest + [f.max for f in pe]
         return np.array(lo), np.array(hi)
 
     def simulate(self, theta=None) -> list[dict]:
@@ -486,7 +602,7 @@ class EstimationProblem:
             Y, _ = b["traj"](p, x0, b["U"])
             sims = {}
             for r, lab in enumerate(b["out_labels"]):
-                y = Y[r]
+                y, _ = self._label_output(b, r, Y)
                 if self._outspec[lab][1] == "rate":
                     y = np.concatenate([[b["Ym"][r][0]], np.diff(y) / np.diff(b["exp"].t)])
                 if lab in self.offsets:
@@ -524,6 +640,19 @@ class EstimationResult:
     #: (see :func:`~mechatron.estimation.bounds.at_bounds`); their intervals assume an
     #: interior optimum and do not hold there.
     at_bound: dict = field(default_factory=dict)
+    #: ``"hac"`` or ``"white"``: how ``std``, ``ci95`` and ``correlation`` were computed.
+    covariance: str = "white"
+    #: Standard errors and intervals assuming white residuals, for comparison.
+    std_white: np.ndarray = None
+    ci95_white: dict = field(default_factory=dict)
+    #: Bartlett bandwidth as a fraction of the record (0 for white).
+    bandwidth_fraction: float = 0.0
+    #: Lag-1 autocorrelation of the residuals by ``"experiment/label"``.
+    residual_rho1: dict = field(default_factory=dict)
+    #: Correlated residuals, poorly identified parameters (see :mod:`.uncertainty`).
+    warnings: list = field(default_factory=list)
+    #: Profile-likelihood 95% intervals of the parameters asked for.
+    profile_ci95: dict = field(default_factory=dict)
 
     @property
     def parameters(self) -> dict:
@@ -535,6 +664,14 @@ class EstimationResult:
                 "at_bound": self.at_bound,
                 "ci95": {k: [float(lo), float(hi)] for k, (lo, hi) in self.ci95.items()},
                 "std": dict(zip(self.names, map(float, self.std))),
+                "covariance": self.covariance,
+                "std_white": dict(zip(self.names, map(float, self.std_white)))
+                if self.std_white is not None else {},
+                "ci95_white": {k: [float(lo), float(hi)]
+                               for k, (lo, hi) in self.ci95_white.items()},
+                "profile_ci95": {k: [float(lo), float(hi)]
+                                 for k, (lo, hi) in self.profile_ci95.items()},
+                "residual_rho1": self.residual_rho1, "warnings": self.warnings,
                 "correlation": {"names": self.names,
                                 "matrix": np.round(self.correlation, 6).tolist()},
                 "cost_initial": self.cost_initial, "cost": self.cost,
@@ -600,16 +737,6 @@ def _rebuild(cm, experiments, free, kwargs):
     return EstimationProblem(cm, experiments, free, **kwargs)
 
 
-def _parse_output(spec: str) -> tuple[str, str]:
-    """``"path"`` -> (path, "value"); ``"rate(path)"`` -> (path, "rate"): the increment of
-    the variable over the previous sample interval divided by its length (what a drive
-    computes from encoder counts), compared from the second sample on."""
-    spec = str(spec).strip()
-    if spec.startswith("rate(") and spec.endswith(")"):
-        return spec[5:-1].strip(), "rate"
-    return spec, "value"
-
-
 def validation_errors(prob: EstimationProblem, theta, experiments=None) -> dict:
     """Simulate ``experiments`` (default: ``prob.validation``) with the free parameters
     and offsets at ``theta`` and compare with their measurements, per experiment and
@@ -625,7 +752,7 @@ def validation_errors(prob: EstimationProblem, theta, experiments=None) -> dict:
             for f, v in zip(prob.free, theta[:nf])]
     m = max(b["substeps"] for b in prob.bound)
     other = EstimationProblem(prob.cm, experiments, free,
-                              **dict(prob._init, free_x0=(),
+                              **dict(prob._init, free_x0=(), per_experiment={},
                                      substeps=[m] * len(experiments)))
     sims = other.simulate(np.concatenate([theta[:nf + no]]))
     out = {}
@@ -657,11 +784,22 @@ def _nrmse(prob: EstimationProblem, sims: list[dict]) -> dict:
 def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: float = 1e-8,
              ftol: float = 1e-10, gtol: float = 1e-10, callback=None, refine: bool = True,
              fine_ratio: float = 1.0, max_step: float = 0.5,
-             log_space: bool = False) -> EstimationResult:
+             log_space: bool = False, covariance: str = "hac", bandwidth=None,
+             profile=()) -> EstimationResult:
     """Solve ``problem`` (see the module docstring); ``callback(iteration, theta, cost)``
-    is called after each Jacobian evaluation (one per iteration) for progress display."""
+    is called after each Jacobian evaluation (one per iteration) for progress display.
+
+    ``covariance`` is ``"hac"`` (default: the Newey-West sandwich with a Bartlett window,
+    valid for correlated residuals, see :mod:`.uncertainty`) or ``"white"`` (the
+    textbook ``s^2 (J^T J)^-1``, for independent errors only); ``bandwidth`` fixes the
+    Bartlett bandwidth in samples (default: Andrews' rule). ``profile`` names parameters
+    (or ``True`` for all) whose profile-likelihood intervals are computed as well
+    (``result.profile_ci95``; a few fits each)."""
     from scipy.special import stdtrit
 
+    if covariance not in ("hac", "white"):
+        raise ParameterError(f"estimate: covariance must be 'hac' or 'white', got "
+                             f"{covariance!r}.")
     prob = problem
     scales = np.array(prob.scales)
     lo_t, hi_t = prob.bounds
@@ -762,15 +900,46 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     s2 = cost / dof
     JtJ = J.T @ J
     try:
-        cov = s2 * np.linalg.inv(JtJ)
+        cov_white = s2 * np.linalg.inv(JtJ)
     except np.linalg.LinAlgError:
-        cov = s2 * np.linalg.pinv(JtJ)
+        cov_white = s2 * np.linalg.pinv(JtJ)
+    std_white = np.sqrt(np.clip(np.diag(cov_white), 0, None))
+    tq_white = float(stdtrit(dof, 0.975))
+    ci_white = {name: (float(v - tq_white * s), float(v + tq_white * s))
+                for name, v, s in zip(prob.names, theta, std_white)}
+    rho1 = residual_rho1(prob, r)
+    if covariance == "hac":
+        cov, b = hac_covariance(J, r, prob.residual_groups(), bandwidth=bandwidth)
+        tq = bartlett_critical(b)
+    else:
+        cov, b, tq = cov_white, 0.0, tq_white
     std = np.sqrt(np.clip(np.diag(cov), 0, None))
-    tq = float(stdtrit(dof, 0.975))
     ci = {name: (float(v - tq * s), float(v + tq * s))
           for name, v, s in zip(prob.names, theta, std)}
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
+    warnings = diagnose(prob.names, std, theta, corr,
+                        rho1 if covariance == "hac" else {},
+                        std_white=std_white, relative=[f.name for f in prob.free])
+    if covariance != "hac" and any(v > RHO_WARN for v in rho1.values()):
+        warnings.insert(0, "residuals are correlated (lag-1 autocorrelation " + ", ".join(
+            f"{k} {v:.2f}" for k, v in rho1.items() if v > RHO_WARN) + ") but the "
+            "intervals assume white noise (covariance=\"white\"): they are too narrow. "
+            "Use covariance=\"hac\".")
+    for w in warnings:
+        log.warning("estimate: %s", w)
+    profile_ci = {}
+    if profile:
+        names = list(prob.names) if profile is True else list(profile)
+        for name in names:
+            if name not in prob.names:
+                raise ParameterError(f"estimate: profile: '{name}' is not a free "
+                                     f"parameter ({', '.join(prob.names)}).", path=name)
+            i = prob.names.index(name)
+            # the likelihood-ratio threshold s^2 c^2, widened by the HAC design effect
+            ratio = (std[i] / std_white[i]) ** 2 if std_white[i] > 0 else 1.0
+            thr = s2 * tq ** 2 * ratio
+            profile_ci[name] = profile_interval(prob, theta, i, thr, std[i])
     wall = time.perf_counter() - start
     lo_b, hi_b = prob.bounds
     hits = at_bounds(prob.names, theta, lo_b, hi_b)
@@ -783,4 +952,17 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
         nrmse_initial=_nrmse(prob, prob.simulate(prob.initial)), history=history,
         iterations=len(history) - 1, evaluations=counts["sims"], wall_time=wall,
         success=bool(success), message=message, problem=prob, at_bound=hits,
-        validation=validation_errors(prob, theta))
+        covariance=covariance, std_white=std_white, ci95_white=ci_white,
+        bandwidth_fraction=b, residual_rho1=rho1, warnings=warnings,
+        profile_ci95=profile_ci, validation=validation_errors(prob, theta))
+
+
+def residual_rho1(prob: EstimationProblem, r: np.ndarray) -> dict:
+    """Lag-1 autocorrelation of the residuals of each experiment and output, by
+    ``"experiment/label"``."""
+    out = {}
+    for b, segments in zip(prob.bound, prob.residual_groups()):
+        for lab, (rows, _k) in zip(b["out_labels"], segments):
+            out[f"{b['exp'].name}/{lab}"] = float(acf(r[rows], 1)[-1]) \
+                if r[rows].size > 2 else 0.0
+    return out

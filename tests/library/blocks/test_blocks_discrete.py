@@ -178,3 +178,32 @@ def test_unit_delay_breaks_a_sampled_feedback_loop():
     m.connect(d.y, s.u2)
     res = mt.simulate(m, 0.6, t_out=np.arange(6) * 0.1 + 0.05)
     np.testing.assert_allclose(res["h.y"], [1, 0, 1, 0, 1, 0], atol=1e-12)
+
+
+def test_delay_is_a_ramp_shifted_by_T_on_its_grid():
+    """Delay(T = 4 Ts) of a ramp: between ticks the output is the ramp's value at the
+    tick 4 samples earlier (0 before the input has travelled through), the same as four
+    unit delays in series."""
+    ts, T = 1e-3, 4e-3
+    m = mt.System("delayed")
+    r = m.add("r", blocks.Ramp(slope=1.0))
+    d = m.add("d", blocks.Delay(T=T, Ts=ts))
+    chain = [m.add(f"u{k}", blocks.UnitDelay(Ts=ts)) for k in range(4)]
+    m.connect(r.y, d.u, chain[0].u)
+    for a, b in zip(chain, chain[1:]):
+        m.connect(a.y, b.u)
+    t = (np.arange(20) + 0.5) * ts
+    res = mt.simulate(m, 0.02, t_out=t, rtol=1e-9, atol=1e-12)
+    last = np.floor(t / ts) * ts
+    np.testing.assert_allclose(res["d.y"], np.maximum(last - T, 0.0), atol=1e-12)
+    np.testing.assert_allclose(res["d.y"], res["u3.y"], atol=1e-12)
+    assert res.stats.events["d"] == 20
+
+
+def test_delay_needs_a_whole_number_of_sample_times():
+    with pytest.raises(mt.errors.ModelError, match=r"T = 0.0025 s is not a whole number of "
+                                                    r"sample times Ts = 0.001 s"):
+        blocks.Delay(T="2.5 ms", Ts=1e-3)
+    assert blocks.Delay(T="3 ms", Ts="1 ms").n == 3
+    with pytest.raises(mt.errors.ModelError, match="T >= 0"):
+        blocks.Delay(T=-1e-3)

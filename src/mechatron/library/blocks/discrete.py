@@ -17,9 +17,10 @@ import numpy as np
 from mechatron.core import Clock, Input, Output, Parameter, Variable, sample
 from mechatron.errors import ModelError
 from mechatron.library.blocks.interfaces import Sampled, coefficients, sized, states
+from mechatron.units import to_si
 
-__all__ = ["ZeroOrderHold", "UnitDelay", "DiscreteIntegrator", "DiscreteTransferFunction",
-           "DiscretePID", "PWM"]
+__all__ = ["ZeroOrderHold", "UnitDelay", "Delay", "DiscreteIntegrator",
+           "DiscreteTransferFunction", "DiscretePID", "PWM"]
 
 
 class _SampledSISO(Sampled, partial=True):
@@ -45,6 +46,70 @@ class UnitDelay(_SampledSISO):
 
     def equations(self):
         return [sample(self.clock(), output={self.y: self.x}, update={self.x: self.u})]
+
+
+def _delay_samples(T, Ts, where: str) -> tuple[float, int]:
+    """``(T, n)`` with ``n = T / Ts`` samples, which must be a whole number."""
+    try:
+        T = float(to_si(T, "s", f"{where}: T"))
+        Ts = float(to_si(Ts, "s", f"{where}: Ts"))
+    except Exception as exc:
+        raise ModelError(f"{where}: {exc}") from None
+    if not (T >= 0 and Ts > 0):
+        raise ModelError(f"{where}: needs T >= 0 and Ts > 0, got T = {T:g} s, "
+                         f"Ts = {Ts:g} s.")
+    n = round(T / Ts)
+    if abs(n * Ts - T) > 1e-9 * max(T, Ts):
+        raise ModelError(f"{where}: the delay T = {T:g} s is not a whole number of sample "
+                         f"times Ts = {Ts:g} s ({T / Ts:.6g}); a delay is exact on its "
+                         f"sample grid only. Use T = {max(n, 1) * Ts:g} s, or a Ts that "
+                         "divides T.")
+    return T, n
+
+
+class Delay(_SampledSISO):
+    """Transport delay on a sample grid: ``y(t_k) = u(t_k - T)`` at the ticks
+    ``t_k = offset + k Ts``, held between them.
+
+    A shift register of ``n = T / Ts`` samples (``T`` a whole number of sample times,
+    fixed when the block is built): ``y_k = x_n,k``, ``x_1,k+1 = u_k``,
+    ``x_i,k+1 = x_i-1,k``. Exact for a signal that is constant between ticks (a DAC
+    output, a sampled command), which is what a drive's computation and PWM delay act on;
+    ``n = 0`` is a zero-order hold. Before the input has travelled through, the output is
+    the registers' start value (0).
+
+    In estimation (:mod:`mechatron.estimation`) a delay whose input is a measured input
+    is applied to the data instead: each experiment's input is shifted by ``T`` on its own
+    sample grid (exact when ``T`` is a whole number of its sample periods), and the rest
+    of the model stays a smooth ODE.
+
+    Parameters
+    ----------
+    T : float or str
+        The delay, s (``"5 ms"``).
+    Ts, offset
+        Sample time and first tick, as every sampled block.
+    """
+
+    def __new__(cls, T=1e-3, **kwargs):
+        _, n = _delay_samples(T, kwargs.get("Ts", 1e-3), "Delay")
+        return super().__new__(sized(cls, n, states(n, what="Register")))
+
+    def __init__(self, T=1e-3, **kwargs):
+        super().__init__(**kwargs)
+        where = f"Delay '{self.name or '(unnamed)'}'"
+        self.T, self.n = _delay_samples(T, kwargs.get("Ts", 1e-3), where)
+        #: Set by estimation: ``y = u`` (the delay is applied to the data instead).
+        self.continuous = False
+
+    def equations(self):
+        x = [getattr(self, f"x{i + 1}") for i in range(self.n)]
+        if self.continuous:
+            return [self.y == self.u] + [xi == self.u for xi in x]
+        if not x:
+            return [sample(self.clock(), output={self.y: self.u})]
+        upd = {x[0]: self.u, **{x[i]: x[i - 1] for i in range(1, self.n)}}
+        return [sample(self.clock(), output={self.y: x[-1]}, update=upd)]
 
 
 class DiscreteIntegrator(_SampledSISO):
