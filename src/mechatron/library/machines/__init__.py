@@ -1,8 +1,14 @@
 """Electrical machines (Modelica's ``Electrical.Machines``): each one part with electrical
 pins, a shaft ``flange`` and a housing ``support``, built as a subsystem of library
-components."""
+components. ``use_heat_port=True`` builds a machine with a ``heat_port`` that takes its
+losses (MSL's ``useThermalPort``)."""
 
 from mechatron.library.machines.dc import (AirGapDC, DCElectricalExcited, DCPermanentMagnet,
                                            DCSeries, DCShunt)
+from mechatron.library.machines.synchronous import (PMSM, AirGapPMSM, AirGapTrapezoidal,
+                                                    PMSMWithHeatPort, TrapezoidalPMSM,
+                                                    TrapezoidalPMSMWithHeatPort, trapezoid)
 
-__all__ = ["DCPermanentMagnet", "DCElectricalExcited", "DCSeries", "DCShunt", "AirGapDC"]
+__all__ = ["DCPermanentMagnet", "DCElectricalExcited", "DCSeries", "DCShunt", "AirGapDC",
+           "PMSM", "TrapezoidalPMSM", "AirGapPMSM", "AirGapTrapezoidal", "PMSMWithHeatPort",
+           "TrapezoidalPMSMWithHeatPort", "trapezoid"]
