@@ -5,10 +5,13 @@ losses (MSL's ``useThermalPort``)."""
 
 from mechatron.library.machines.dc import (AirGapDC, DCElectricalExcited, DCPermanentMagnet,
                                            DCSeries, DCShunt)
+from mechatron.library.machines.induction import (AirGapInduction, InductionMachine,
+                                                  InductionMachineWithHeatPort)
 from mechatron.library.machines.synchronous import (PMSM, AirGapPMSM, AirGapTrapezoidal,
                                                     PMSMWithHeatPort, TrapezoidalPMSM,
                                                     TrapezoidalPMSMWithHeatPort, trapezoid)
 
 __all__ = ["DCPermanentMagnet", "DCElectricalExcited", "DCSeries", "DCShunt", "AirGapDC",
            "PMSM", "TrapezoidalPMSM", "AirGapPMSM", "AirGapTrapezoidal", "PMSMWithHeatPort",
-           "TrapezoidalPMSMWithHeatPort", "trapezoid"]
+           "TrapezoidalPMSMWithHeatPort", "trapezoid", "InductionMachine", "AirGapInduction",
+           "InductionMachineWithHeatPort"]
