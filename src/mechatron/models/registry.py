@@ -18,7 +18,7 @@ BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum"
                    "solenoid", "hydraulic_cylinder",
                    "buck_converter", "hbridge_filter", "stepper",
                    "bldc", "servo_encoder", "geared_drive", "two_axis", "dc_motor_control",
-                   "planetary_hoist")
+                   "planetary_hoist", "saturating_solenoid")
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
