@@ -18,7 +18,8 @@ BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum"
                    "solenoid", "hydraulic_cylinder",
                    "buck_converter", "hbridge_filter", "stepper",
                    "bldc", "servo_encoder", "geared_drive", "two_axis", "dc_motor_control",
-                   "planetary_hoist", "saturating_solenoid")
+                   "planetary_hoist", "saturating_solenoid",
+                   "two_clutch_gearbox")
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
