@@ -19,7 +19,8 @@ BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum"
                    "buck_converter", "hbridge_filter", "stepper",
                    "bldc", "servo_encoder", "geared_drive", "two_axis", "dc_motor_control",
                    "planetary_hoist", "saturating_solenoid",
-                   "two_clutch_gearbox", "battery_bldc")
+                   "two_clutch_gearbox", "battery_bldc",
+                   "induction_dol")
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
