@@ -8,9 +8,11 @@ not ask for it unchanged. Every variant is a named, module-level class (document
 checked for balance like any other part); the option only picks it::
 
     class Inertia(OptionDispatch, Component):
+        _options = {"use_phi": False}          # option keywords and their defaults
+
         @classmethod
-        def _variant(cls, options):            # options: the keywords named in _options
-            return InertiaWithAngle if options.get("use_phi") else cls
+        def _variant(cls, options, kwargs):    # options merged over the defaults
+            return InertiaWithAngle if options["use_phi"] or "phi" in kwargs else cls
 """
 
 from __future__ import annotations
