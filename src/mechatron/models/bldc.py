@@ -3,8 +3,9 @@
 The drive of issue 6 (the seed built it in Simscape, without parameters; the values here
 are *chosen*: a small 24 V motor). Its parts:
 
-* a three-phase star winding with a **trapezoidal back EMF** and a one-pole-pair rotor
-  (:class:`TrapezoidalStarWinding`);
+* a three-phase star winding with a **trapezoidal back EMF** and a one-pole-pair rotor: the
+  library's :class:`~mechatron.library.machines.PMSM` with ``emf="trapezoidal"`` (its
+  rotor inertia and bearing friction carry the drive's ``J`` and ``B``);
 * a three-phase inverter of three legs (:class:`InverterLeg`, a subsystem used three
   times), each two N-channel MOSFETs with body diodes (library
   :class:`~mechatron.library.electrical.NMOSFET`) fed by a DC supply, each gate driven by
@@ -73,12 +74,13 @@ import mechatron as mt
 from mechatron.errors import ModelError
 from mechatron.library import electrical as el
 from mechatron.library import rotational as rot
+from mechatron.library.machines import PMSM, trapezoid
 from mechatron.library.electrical.interfaces import OnePort, Pin
 from mechatron.library.rotational.interfaces import TwoFlange
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
 
-__all__ = ["trapezoid", "TrapezoidalStarWinding", "HallSensors", "SixStepCommutation",
+__all__ = ["trapezoid", "HallSensors", "SixStepCommutation",
            "SpeedPI", "PWMComparator", "GateDriver", "InverterLeg", "DutyScaledSource",
            "build_acausal",
            "build_equation", "BLDCDriveEquation", "BLDCDriveEquationPWM", "COMMUTATION",
@@ -88,6 +90,9 @@ CHOSEN = "chosen: a small 24 V BLDC motor"
 DESIGN = "chosen: controller design"
 TWO_PI_3 = 2 * math.pi / 3
 DEG = math.pi / 180
+#: Nominal frequency the machine's open-circuit voltage is quoted at (any value: the
+#: machine's flux linkage is k_e / p whatever it is)
+F_NOM = 50.0
 
 #: Six-step table: sector -> (phase on the positive rail, phase on the negative rail).
 COMMUTATION = {1: ("a", "b"), 2: ("a", "c"), 3: ("b", "c"),
@@ -96,24 +101,6 @@ COMMUTATION = {1: ("a", "b"), 2: ("a", "c"), 3: ("b", "c"),
 HALL_CODE = {1: 5, 2: 4, 3: 6, 4: 2, 5: 3, 6: 1}
 #: Electrical angles of the rising edges of the Hall signals a, b, c (rad).
 HALL_EDGES = (30 * DEG, 150 * DEG, 270 * DEG)
-
-
-def trapezoid(x):
-    """Unit trapezoidal back-EMF shape of electrical angle ``x``: 0 at ``x = 0``, rising
-    linearly to 1 at 30 degrees, flat up to 150 degrees, falling to -1 at 210 degrees, flat
-    to 330 degrees, periodic in 2 pi.
-
-    Written as a clipped triangle wave, ``clip(g(x) / (pi/6), -1, 1)`` with
-    ``g(x) = pi/2 - |m - pi/2|`` and ``m = x + pi/2 mod 2 pi - pi/2`` (``g`` is
-    ``asin(sin x)``, without the infinite slope of ``asin`` at the peaks, which would make
-    the Jacobian NaN there). Works for numbers and CasADi expressions.
-    """
-    if isinstance(x, (int, float)):
-        m = (x + math.pi / 2) % (2 * math.pi) - math.pi / 2
-        return max(-1.0, min(1.0, (math.pi / 2 - abs(m - math.pi / 2)) / (math.pi / 6)))
-    y = x + ca.pi / 2
-    m = y - 2 * ca.pi * ca.floor(y / (2 * ca.pi)) - ca.pi / 2
-    return ca.fmin(1, ca.fmax(-1, (ca.pi / 2 - ca.fabs(m - ca.pi / 2)) / (ca.pi / 6)))
 
 
 def _indicator(x, s, values=range(1, 7)):
@@ -127,67 +114,6 @@ def _indicator(x, s, values=range(1, 7)):
 
 
 # -- components -------------------------------------------------------------------------
-
-class TrapezoidalStarWinding(TwoFlange):
-    """Three-phase star-connected stator winding with a trapezoidal back EMF (the
-    electromechanical core of a BLDC motor), rotor at flange ``A``, stator at ``B``.
-
-    Per phase ``k`` in (a, b, c), with the star point at potential ``v_n``::
-
-        k.v - v_n == R i_k + L di_k/dt + e_k
-        e_k == k_e w f(p theta - k 2 pi/3)          f: unit trapezoid (:func:`trapezoid`)
-        i_a + i_b + i_c == 0                        (star point, no neutral wire)
-        T == k_e sum_k f(p theta - k 2 pi/3) i_k    (so T w == sum_k e_k i_k)
-        tau == -T,  dtheta/dt == w                  (w = A.w - B.w)
-
-    ``i_k`` flows from pin ``k`` into the winding; ``T`` is the torque the magnets exert on
-    the rotor (delivered at flange ``A``). Summing the phase equations gives the star
-    point ``v_n == (sum_k k.v - sum_k e_k) / 3`` (equal R and L in every phase), which is
-    how it is written; only ``i_a`` and ``i_b`` are states. ``k_e`` is the per-phase
-    back-EMF constant (peak of ``e_k / w``); with two phases conducting ``+I`` and ``-I``
-    on the flat tops the torque is ``2 k_e I`` and the line-to-line back EMF
-    ``2 k_e w``.
-
-    Limitations: no saturation, reluctance or cogging torque, no mutual inductance
-    (``L`` is the per-phase self inductance minus mutual, as usual for BLDC data).
-    """
-
-    a = Pin(doc="Phase a terminal")
-    b = Pin(doc="Phase b terminal")
-    c = Pin(doc="Phase c terminal")
-    R = mt.Parameter("Ohm", default=0.5, min=0, doc="Phase resistance")
-    L = mt.Parameter("H", default=1e-3, min=0, doc="Phase inductance")
-    k_e = mt.Parameter("V*s/rad", default=0.05, min=0,
-                       doc="Back-EMF constant per phase (peak e_k / w)")
-    p = mt.Parameter("1", default=1.0, min=1, doc="Pole pairs")
-    i_a = mt.Variable("A", start=0.0, doc="Phase a current (into pin a)")
-    i_b = mt.Variable("A", start=0.0, doc="Phase b current (into pin b)")
-    i_c = mt.Variable("A", doc="Phase c current (into pin c)")
-    e_a = mt.Variable("V", doc="Phase a back EMF")
-    e_b = mt.Variable("V", doc="Phase b back EMF")
-    e_c = mt.Variable("V", doc="Phase c back EMF")
-    v_n = mt.Variable("V", doc="Star point potential")
-    theta = mt.Variable("rad", start=0.0, doc="Rotor angle (mechanical), A relative to B")
-    T = mt.Variable("N*m", doc="Electromagnetic torque on the rotor")
-
-    def equations(self):
-        th = self.p * self.theta
-        shapes = [trapezoid(th), trapezoid(th - TWO_PI_3), trapezoid(th + TWO_PI_3)]
-        currents = [self.i_a, self.i_b, self.i_c]
-        emfs = [self.e_a, self.e_b, self.e_c]
-        return [mt.der(self.theta) == self.w,
-                self.a.i == self.i_a, self.b.i == self.i_b, self.c.i == self.i_c,
-                self.i_c == -(self.i_a + self.i_b),
-                *[e == self.k_e * self.w * f for e, f in zip(emfs, shapes)],
-                self.v_n == (self.a.v + self.b.v + self.c.v - self.e_a - self.e_b
-                             - self.e_c) / 3,
-                self.L * mt.der(self.i_a) == self.a.v - self.v_n - self.R * self.i_a
-                - self.e_a,
-                self.L * mt.der(self.i_b) == self.b.v - self.v_n - self.R * self.i_b
-                - self.e_b,
-                self.T == self.k_e * sum(f * i for f, i in zip(shapes, currents)),
-                self.tau == -self.T]
-
 
 class HallSensors(TwoFlange):
     """Three digital Hall sensors 120 electrical degrees apart, and the sector they
@@ -380,10 +306,13 @@ def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R
     commutation = m.add("commutation", SixStepCommutation())
     controller = m.add("controller", SpeedPI(w_ref=w_ref, K_p=K_p, K_i=K_i, K_aw=K_aw,
                                              d_max=d_max))
-    winding = m.add("winding", TrapezoidalStarWinding(R=R, L=L, k_e=k_e))
+    # the library machine: peak phase EMF p psi w = k_e w with one pole pair, the phase
+    # inductance L_s_sigma + L_md = L, the drive's inertia and friction on its rotor
+    motor = m.add("motor", PMSM(emf="trapezoidal", p=1.0, R_s=R, L_s_sigma=L, L_md=0.0,
+                                L_mq=0.0, f_s_nom=F_NOM,
+                                V_s_open_circuit=k_e * 2 * math.pi * F_NOM / math.sqrt(2),
+                                J_r=J, B_v=B))
     hall = m.add("hall", HallSensors())
-    rotor = m.add("rotor", rot.Inertia(J=J, w=mt.Start(0.0, "low")))
-    friction = m.add("friction", rot.RotationalDamper(D=B))
     load = m.add("load", rot.ConstantTorque(T=-T_load))
     tacho = m.add("tacho", rot.AngularVelocitySensor())
     housing = m.add("housing", rot.RotationalReference())
@@ -393,11 +322,11 @@ def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R
                                             V_g=V_g))
         m.connect(supply.p, leg.dc_p)
         m.connect(leg.dc_n, supply.n)
-        m.connect(leg.out, getattr(winding, k))
+        m.connect(leg.out, getattr(motor, k))
         m.connect(getattr(commutation, f"g_{k}h"), leg.cmd_h)
         m.connect(getattr(commutation, f"g_{k}l"), leg.cmd_l)
-    m.connect(winding.A, rotor.port, friction.A, load.A, hall.A, tacho.A)
-    m.connect(winding.B, friction.B, load.B, hall.B, tacho.B, housing.port)
+    m.connect(motor.flange, load.A, hall.A, tacho.A)
+    m.connect(motor.support, load.B, hall.B, tacho.B, housing.port)
     m.connect(hall.sector, commutation.sector)
     m.connect(tacho.W, controller.w)
     if f_pwm > 0:
@@ -589,8 +518,8 @@ _PARAMS = {
 }
 
 _OUTPUTS = {
-    "acausal": {"sector": "hall.sector", "w": "rotor.w", "i_a": "winding.i_a",
-                "i_b": "winding.i_b", "i_c": "winding.i_c", "T": "winding.T",
+    "acausal": {"sector": "hall.sector", "w": "motor.inertia.w", "i_a": "motor.airgap.i_a",
+                "i_b": "motor.airgap.i_b", "i_c": "motor.airgap.i_c", "T": "motor.airgap.T",
                 "d": "controller.d"},
     "equation": {"sector": "sector", "w": "w", "i_a": "i_a", "i_b": "i_b", "i_c": "i_c",
                  "T": "T", "d": "d"},

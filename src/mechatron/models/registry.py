@@ -18,7 +18,9 @@ BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum"
                    "solenoid", "hydraulic_cylinder",
                    "buck_converter", "hbridge_filter", "stepper",
                    "bldc", "servo_encoder", "geared_drive", "two_axis", "dc_motor_control", "emps",
-                   "planetary_hoist")
+                   "planetary_hoist", "saturating_solenoid",
+                   "two_clutch_gearbox", "battery_bldc",
+                   "induction_dol")
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False

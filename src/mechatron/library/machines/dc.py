@@ -6,12 +6,15 @@ from mechatron.library import electrical as el
 from mechatron.library import rotational as rot
 from mechatron.library.electrical.interfaces import OnePort, Pin
 from mechatron.library.electromechanical import RotationalEMF
+from mechatron.library.machines.interfaces import MachineOptions, thermal_variant
 from mechatron.library.rotational.interfaces import Flange, TwoFlange
 
-__all__ = ["DCPermanentMagnet", "DCElectricalExcited", "DCSeries", "DCShunt", "AirGapDC"]
+__all__ = ["DCPermanentMagnet", "DCElectricalExcited", "DCSeries", "DCShunt", "AirGapDC",
+           "DCPermanentMagnetWithHeatPort", "DCElectricalExcitedWithHeatPort",
+           "DCSeriesWithHeatPort", "DCShuntWithHeatPort"]
 
 
-class DCPermanentMagnet(Component):
+class DCPermanentMagnet(MachineOptions, Component):
     """Permanent-magnet brush DC machine: armature resistance and inductance, EMF, rotor
     inertia and viscous friction, as one part (a subsystem of library components).
 
@@ -28,6 +31,7 @@ class DCPermanentMagnet(Component):
     connect ``support`` to a fixed reference (a housing on a moving support is not modelled); no
     brush drop, no saturation, no armature reaction; a constant field (for an
     electrically excited field use ``RotationalEMF`` with a controlled ``k``).
+    ``use_heat_port=True`` builds the variant whose ``heat_port`` takes the losses.
     """
 
     R = Parameter("Ohm", default=7.1, min=0, doc="Armature resistance")
@@ -56,6 +60,9 @@ class DCPermanentMagnet(Component):
                 connect(self.emf.n, self.n),
                 connect(self.emf.A, self.inertia.port, self.friction.A, self.flange),
                 connect(self.emf.B, self.friction.B, self.support)]
+
+    def _loss_power(self):
+        return self.resistor.v * self.resistor.i + self.friction.tau * self.friction.w
 
 
 class AirGapDC(OnePort, TwoFlange):
@@ -88,8 +95,10 @@ class AirGapDC(OnePort, TwoFlange):
                 self.tau == -self.psi * self.i]
 
 
-class _DCMachine(Component, partial=True):
-    """Nominal data (MSL's ``DcElectricalExcitedData`` defaults), armature and rotor."""
+class _DCMachine(MachineOptions, Component, partial=True):
+    """Nominal data (MSL's ``DcElectricalExcitedData`` defaults), armature and rotor;
+    ``use_heat_port=True`` builds the variant whose ``heat_port`` takes the copper losses
+    of armature and field and the bearing friction."""
 
     V_a_nom = Parameter("V", default=100.0, min=0, doc="Nominal armature voltage")
     I_a_nom = Parameter("A", default=100.0, min=0, doc="Nominal armature current")
@@ -109,6 +118,10 @@ class _DCMachine(Component, partial=True):
     l_a = el.Inductor(L=L_a)
     inertia = rot.Inertia(J=J_r)
     friction = rot.RotationalDamper(D=B_v)
+
+    def _loss_power(self):
+        return (self.r_a.v * self.r_a.i + self.r_e.v * self.r_e.i
+                + self.friction.tau * self.friction.w)
 
 
 # the nominal data, to pass on in the machines' class bodies
@@ -215,3 +228,10 @@ class DCShunt(_DCMachine):
                 connect(self.airgap.fn, self.n),
                 connect(self.airgap.A, self.inertia.port, self.friction.A, self.flange),
                 connect(self.airgap.B, self.friction.B, self.support)]
+
+
+DCPermanentMagnetWithHeatPort = thermal_variant(DCPermanentMagnet, "R i^2 + B_v w^2")
+_DC_LOSSES = "R_a i_a^2 + R_e i_e^2 + B_v w^2"
+DCElectricalExcitedWithHeatPort = thermal_variant(DCElectricalExcited, _DC_LOSSES)
+DCSeriesWithHeatPort = thermal_variant(DCSeries, _DC_LOSSES)
+DCShuntWithHeatPort = thermal_variant(DCShunt, _DC_LOSSES)

@@ -9,6 +9,10 @@ written like the electrical ones: ``MmfSource`` raises ``B`` by ``F`` over ``A``
 ``FluxSource`` pushes ``Phi`` out of ``B``. One-port components (reference) have a single
 port ``port``. Every magnetic network needs a ``MagneticReference``.
 
+Flux tubes from geometry and material (saturating soft iron after MSL's approximation or
+a B(H) table, permanent magnets, leakage, air gaps that move and pull) are in
+:mod:`~mechatron.library.magnetic.fluxtubes`.
+
 The ``ElectromagneticConverter`` couples to electrical pins ``p``/``n``; the
 ``ReluctanceForceActuator`` to translational flanges ``rod``/``case``.
 """
@@ -21,9 +25,23 @@ from mechatron.library.magnetic.components import (MU0, AirGapReluctance,
                                                    Reluctance, VariableAirGapReluctance)
 from mechatron.library.magnetic.converters import (ElectromagneticConverter,
                                                    ReluctanceForceActuator)
+from mechatron.library.magnetic.fluxtubes import (HARD_MAGNETIC, LEAKAGE_SHAPES,
+                                                  SOFT_MAGNETIC, Cuboid,
+                                                  CuboidOrthogonalFluxForce,
+                                                  CuboidParallelFluxForce, FluxTube,
+                                                  HardMagnetic, HollowCylinderAxialFlux,
+                                                  HollowCylinderAxialFluxForce,
+                                                  HollowCylinderRadialFlux, Leakage,
+                                                  PermanentMagnet, SaturatingReluctance,
+                                                  SoftMagnetic)
 from mechatron.library.magnetic.interfaces import MagneticPort, TwoPort
 
 __all__ = ["MU0", "MagneticPort", "TwoPort", "Reluctance", "AirGapReluctance",
            "VariableAirGapReluctance", "EddyCurrent", "MmfSource", "ControlledMmfSource",
            "FluxSource", "ControlledFluxSource", "MagneticReference", "FluxSensor",
-           "MmfSensor", "ElectromagneticConverter", "ReluctanceForceActuator"]
+           "MmfSensor", "ElectromagneticConverter", "ReluctanceForceActuator",
+           "FluxTube", "SaturatingReluctance", "Cuboid", "HollowCylinderAxialFlux",
+           "HollowCylinderRadialFlux", "PermanentMagnet", "Leakage",
+           "CuboidParallelFluxForce", "CuboidOrthogonalFluxForce",
+           "HollowCylinderAxialFluxForce", "SoftMagnetic", "HardMagnetic", "SOFT_MAGNETIC",
+           "HARD_MAGNETIC", "LEAKAGE_SHAPES"]

@@ -13,6 +13,7 @@ MSL-named ``SpringDamper`` and ``ElastoBacklash``. ``IdealPlanetary`` has flange
 
 from mechatron.library.rotational.components import (AngularVelocitySensor, IdealGear,
                                                       IdealTorqueSource, Inertia,
+                                                      InertiaWithAngle,
                                                       RotationalDamper, RotationalFriction,
                                                       RotationalReference, RotationalSpring)
 from mechatron.library.rotational.compliant import ElastoBacklash, SpringDamper
@@ -27,7 +28,7 @@ from mechatron.library.rotational.sensors import AngleSensor, PowerSensor, Torqu
 from mechatron.library.rotational.sources import (ConstantTorque, IdealAngleSource,
                                                    IdealAngularVelocitySource)
 
-__all__ = ["Flange", "TwoFlange", "Inertia", "RotationalSpring", "RotationalDamper",
+__all__ = ["Flange", "TwoFlange", "Inertia", "InertiaWithAngle", "RotationalSpring", "RotationalDamper",
            "RotationalFriction", "IdealGear", "RotationalReference", "IdealTorqueSource",
            "AngularVelocitySensor",
            "RotationalHardStop", "RotationalBacklash", "FrictionClutch", "FanLoad",

@@ -3,14 +3,25 @@
 import casadi as ca
 
 from mechatron.core import Component, Input, Output, Parameter, Variable, der
+from mechatron.library._options import OptionDispatch
 from mechatron.library.rotational.interfaces import Flange, TwoFlange
 
 
-class Inertia(Component):
+class Inertia(OptionDispatch, Component):
     """Rotating inertia referenced to the (implicit) ground.
 
     Equations: ``J dw/dt = port.tau``, ``w = port.w``. Stores ``J w^2 / 2``.
+
+    The angle (MSL's ``Inertia.phi``) is a state only where it is asked for:
+    ``Inertia(use_phi=True)`` or a start angle ``Inertia(phi=...)`` builds an
+    :class:`InertiaWithAngle`; without, the compiled model has no angle state.
     """
+
+    _options = {"use_phi": False}
+
+    @classmethod
+    def _variant(cls, options, kwargs):
+        return InertiaWithAngle if options["use_phi"] or "phi" in kwargs else cls
 
     port = Flange(doc="Flange of the inertia")
     J = Parameter("kg*m^2", default=1e-3, min=0, doc="Moment of inertia")
@@ -19,6 +30,21 @@ class Inertia(Component):
     def equations(self):
         return [self.w == self.port.w,
                 self.J * der(self.w) == self.port.tau]
+
+
+class InertiaWithAngle(Inertia):
+    """Rotating inertia with its angle as a state (``Inertia(use_phi=True)`` or
+    ``Inertia(phi=...)``; MSL's ``Inertia`` with ``phi``).
+
+    Equations: as :class:`Inertia`, and ``dphi/dt == w`` (``phi`` starts at 0 unless
+    given).
+    """
+
+    _options = {"use_phi": True}
+    phi = Variable("rad", start=0.0, doc="Angle of the inertia")
+
+    def equations(self):
+        return [der(self.phi) == self.w]
 
 
 class RotationalSpring(TwoFlange):

@@ -8,7 +8,8 @@ the older parts (``x``), the length from A to B (MSL's ``s_rel``) in the MSL-nam
 ``SpringDamper`` and ``ElastoGap``.
 """
 
-from mechatron.library.translational.components import (IdealForceSource, Mass, MotionSensor,
+from mechatron.library.translational.components import (IdealForceSource, Mass,
+                                                         MassWithPosition, MotionSensor,
                                                          TranslationalDamper,
                                                          TranslationalFriction,
                                                          TranslationalReference,
@@ -25,7 +26,7 @@ from mechatron.library.translational.sensors import (AccelerationSensor, ForceSe
 from mechatron.library.translational.sources import (ConstantForce, IdealPositionSource,
                                                       IdealVelocitySource)
 
-__all__ = ["Flange", "TwoFlange", "Mass", "TranslationalSpring", "TranslationalDamper",
+__all__ = ["Flange", "TwoFlange", "Mass", "MassWithPosition", "TranslationalSpring", "TranslationalDamper",
            "TranslationalFriction", "TranslationalReference", "IdealForceSource",
            "MotionSensor",
            "TranslationalHardStop", "PreloadedSpring", "IdealVelocitySource",

@@ -3,14 +3,25 @@
 import casadi as ca
 
 from mechatron.core import Component, Input, Output, Parameter, Variable, der
+from mechatron.library._options import OptionDispatch
 from mechatron.library.translational.interfaces import Flange, TwoFlange
 
 
-class Mass(Component):
+class Mass(OptionDispatch, Component):
     """Point mass referenced to the (implicit) ground.
 
     Equations: ``m dv/dt = port.f``, ``v = port.v``. Stores ``m v^2 / 2``.
+
+    The position (MSL's ``Mass.s``) is a state only where it is asked for:
+    ``Mass(use_s=True)`` or a start position ``Mass(s=...)`` builds a
+    :class:`MassWithPosition`; without, the compiled model has no position state.
     """
+
+    _options = {"use_s": False}
+
+    @classmethod
+    def _variant(cls, options, kwargs):
+        return MassWithPosition if options["use_s"] or "s" in kwargs else cls
 
     port = Flange(doc="Flange of the mass")
     m = Parameter("kg", default=1.0, min=0, doc="Mass")
@@ -18,6 +29,20 @@ class Mass(Component):
 
     def equations(self):
         return [self.v == self.port.v, self.m * der(self.v) == self.port.f]
+
+
+class MassWithPosition(Mass):
+    """Point mass with its position as a state (``Mass(use_s=True)`` or ``Mass(s=...)``;
+    MSL's ``Mass`` with ``s``).
+
+    Equations: as :class:`Mass`, and ``ds/dt == v`` (``s`` starts at 0 unless given).
+    """
+
+    _options = {"use_s": True}
+    s = Variable("m", start=0.0, doc="Position of the mass")
+
+    def equations(self):
+        return [der(self.s) == self.v]
 
 
 class TranslationalSpring(TwoFlange):
