@@ -299,3 +299,20 @@ def test_import_mechatron_does_not_load_fmpy():
     code = ("import sys, mechatron as mt; assert 'fmpy' not in sys.modules; "
             "mt.FMUComponent; assert 'fmpy' not in sys.modules")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_a_model_with_an_fmu_block_is_not_turned_into_c(fmus, tmp_path):
+    from mechatron.codegen import CodegenError, generate_c
+    model = loop(mt.FMUComponent(fmus["cs2"], Ts=TS, outputs=["w"]))
+    with pytest.raises(CodegenError, match="plant is an imported FMU"):
+        generate_c(model, tmp_path / "c", solver="rk4", dt=DT)
+
+
+def test_a_compiled_model_with_an_fmu_block_is_saved_and_loaded(fmus, tmp_path):
+    cm = mt.compile_model(loop(mt.FMUComponent(fmus["cs2"], Ts=TS, outputs=["w"])))
+    cm.save(tmp_path / "loop.mtc")
+    again = type(cm).load(tmp_path / "loop.mtc")
+    assert again.report["external_blocks"][0]["path"] == "plant"
+    a = mt.simulate(cm, 0.01, solver="rk4", dt=DT)
+    b = mt.simulate(again, 0.01, solver="rk4", dt=DT)
+    np.testing.assert_array_equal(a["plant.w"], b["plant.w"])
