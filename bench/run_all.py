@@ -29,6 +29,7 @@ import bench_emps
 import bench_estimation
 import bench_events
 import bench_explore
+import bench_fmu_import
 import bench_import
 import bench_multibody
 import bench_pwm
@@ -45,7 +46,7 @@ BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
               "dimensions": bench_dimensions.run, "subsystems": bench_subsystems.run,
               "events": bench_events.run,
               "stiff_contact": bench_stiff_contact.run,
-              "explore": bench_explore.run}
+              "explore": bench_explore.run, "fmu_import": bench_fmu_import.run}
 
 #: Goals of issue 17 for the RC ladder: compile seconds by N, and simulation at least
 #: twice as fast as the SciPy peer (ratio peer / Mechatron >= 2) at these N.
@@ -313,13 +314,26 @@ def _rows_explore(r: dict) -> list[dict]:
                  ladder["change_s"]["median_s"])]
 
 
+def _rows_fmu_import(r: dict) -> list[dict]:
+    out = []
+    for x in r["rows"]:
+        direct = x["host"] == "rk4"
+        peer = r["direct_rk4_s"] / x["steps"] * 1e3 if direct else None
+        out.append(_row(f"FMU import, {x['fmu']} FMU, {x['host']} host, per 1 ms "
+                        "communication step", "ms", x["ms_per_step"],
+                        "the motor as a part (RK4)" if direct else None, peer,
+                        peer / x["ms_per_step"] if direct else None))
+    return out
+
+
 TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_pwm,
               "scaling": _rows_scaling, "codegen": _rows_codegen,
               "realtime": _rows_realtime, "multibody": _rows_multibody,
               "estimation": _rows_estimation, "emps": _rows_emps,
               "dimensions": _rows_dimensions,
               "subsystems": _rows_subsystems, "events": _rows_events,
-              "stiff_contact": _rows_stiff_contact, "explore": _rows_explore}
+              "stiff_contact": _rows_stiff_contact, "explore": _rows_explore,
+              "fmu_import": _rows_fmu_import}
 
 
 def table(results: dict) -> list[dict]:

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
                            models, realtime, report, results, solvers, units, viz)
     from mechatron.analysis import OperatingPoint, linearize, trim
     from mechatron.compiler import CompiledModel, compile_model
+    from mechatron.fmi import FMUComponent
     from mechatron.results import SimResult, SolverStats
     from mechatron.solvers import simulate
 
@@ -43,7 +44,7 @@ __all__ = ["Component", "Connector", "Domain", "System", "Parameter", "Variable"
            "Clock", "sample", "when", "Discrete", "pre", "initial", "terminal", "reinit",
            "steady_state", "logic_and", "logic_or", "logic_not",
            "compile_model", "CompiledModel", "simulate", "SimResult", "SolverStats",
-           "linearize", "trim", "OperatingPoint",
+           "linearize", "trim", "OperatingPoint", "FMUComponent",
            "library", "models"]
 
 #: Public names imported on first access: name -> module that defines it.
@@ -51,13 +52,15 @@ _LAZY_NAMES = {"compile_model": "mechatron.compiler",
                "linearize": "mechatron.analysis",
                "trim": "mechatron.analysis",
                "OperatingPoint": "mechatron.analysis",
+               "FMUComponent": "mechatron.fmi",
                "CompiledModel": "mechatron.compiler",
                "simulate": "mechatron.solvers",
                "SimResult": "mechatron.results",
                "SolverStats": "mechatron.results"}
 
 #: Subpackages reachable as attributes (``mt.library``, ``mt.codegen``) before an import.
-_SUBMODULES = frozenset({"analysis", "cli", "codegen", "compiler", "core", "estimation", "library",
+_SUBMODULES = frozenset({"analysis", "cli", "codegen", "compiler", "core", "estimation", "fmi",
+                         "library",
                          "models", "realtime", "report", "results", "solvers", "units",
                          "viz"})
 

@@ -371,3 +371,42 @@ def test_the_drive_on_the_library_pmsm_equals_todays_drive(run):
     # of an edge (one output sample at most per edge)
     differ = run["hall.sector"] != ref["hall.sector"]
     assert differ.sum() <= 2
+
+
+def test_the_inputs_variant_closed_by_the_speed_controller_is_the_drive():
+    """The ``inputs`` variant (no controller; duty cycle and load torque in) used as a
+    part, its duty driven by the module's SpeedPI reading its tachometer and its load by
+    the constant torque: the closed-loop ``acausal`` drive to 1e-9 (rtol 1e-12)."""
+    from mechatron.library import blocks
+    from mechatron.models.bldc import SpeedPI
+    cm = mt.compile_model(ENTRY.build("inputs"))
+    assert cm.input_names == ["d", "T_load"]
+    m = mt.System("closed_loop")
+    plant = m.add("plant", ENTRY.build("inputs"))
+    pi = m.add("controller", SpeedPI(w_ref=P["w_ref"], K_p=P["K_p"], K_i=P["K_i"],
+                                     K_aw=P["K_aw"], d_max=P["d_max"]))
+    load = m.add("torque", blocks.Constant(value=P["T_load"]))
+    m.connect(plant.tacho.W, pi.w)
+    m.connect(pi.d, plant.d)
+    m.connect(load.y, plant.T_load)
+    t = np.linspace(0.0, 0.05, 101)
+    kw = dict(t_out=t, rtol=1e-12, atol=1e-13)
+    ref = mt.simulate(ENTRY.build("acausal"), 0.05, **kw)
+    res = mt.simulate(m, 0.05, **kw)
+    for label, path in ENTRY.output_paths("acausal").items():
+        got = res["controller.d" if label == "d" else f"plant.{path}"]
+        np.testing.assert_allclose(got, ref[path], rtol=0,
+                                   atol=1e-9 * max(1.0, np.abs(ref[path]).max()))
+
+
+def test_the_inputs_variant_open_loop_reaches_the_dc_motor_speed():
+    """Open loop with a constant duty d and load T: with 120-degree conduction the drive
+    is a DC motor of constant 2 k_e and resistance 2 R (plus two switch resistances) fed
+    with d V_dc, so w = (2 k_e d V_dc - 2 R_t T) / (2 R_t B + (2 k_e)^2), R_t = R + R_on,
+    up to the commutation ripple (the back EMF leaves its flat top around commutations)."""
+    d, T = 0.5, 0.02
+    res = mt.simulate(ENTRY.build("inputs"), 0.3, rtol=1e-8, atol=1e-10,
+                      inputs={"d": d, "T_load": T}, t_out=np.linspace(0.2, 0.3, 2001))
+    k_t, R_t = 2 * P["k_e"], 2 * (P["R"] + P["R_on"])
+    w_dc = (k_t * d * P["V_dc"] - R_t * T) / (R_t * P["B"] + k_t ** 2)
+    assert np.mean(res["motor.inertia.w"]) == pytest.approx(w_dc, rel=5e-3)

@@ -86,3 +86,31 @@ def test_motor_turns_at_the_speed_of_the_mean_bridge_voltage(steady):
     V = p["V_bus"] * p["D"]
     w_dc = p["k"] * V / (p["R"] * p["B"] + p["k"] ** 2)
     assert trapezoid(y["motor.inertia.w"], t) / (t[-1] - t[0]) == pytest.approx(w_dc, rel=1e-6)
+
+
+def test_the_inputs_variant_driven_by_the_fixed_duty_is_the_circuit():
+    """The duty cycle input at the fixed source's duty and no load: the modulator latches
+    it each period and switches at the same edges, so the ``acausal`` circuit to 1e-9."""
+    t = np.linspace(0, 0.01, 201)
+    kw = dict(solver="rk45", rtol=1e-11, atol=1e-13, t_out=t)
+    ref = mt.simulate(ENTRY.build("acausal", D=0.7), 0.01, **kw)
+    cm = mt.compile_model(ENTRY.build("inputs"))
+    assert cm.input_names == ["D", "tau_load"]
+    res = mt.simulate(cm, 0.01, inputs={"D": 0.7, "tau_load": 0.0}, **kw)
+    for path in ENTRY.output_paths("inputs").values():
+        np.testing.assert_allclose(res[path], ref[path], rtol=0,
+                                   atol=1e-9 * np.abs(ref[path]).max())
+
+
+def test_a_load_torque_input_lowers_the_mean_speed_as_the_dc_response():
+    """The drive is linear: its periodic mean speed under a load torque T is the DC
+    response (k V_bus D - R T) / (R B + k^2)."""
+    p = ENTRY.values()
+    D, T = 0.7, 0.005
+    period, t_stop = 1 / p["f"], ENTRY.experiment.t_stop
+    t = np.linspace(t_stop - period, t_stop, 2001)
+    res = mt.simulate(ENTRY.build("inputs"), t_stop, solver="rk45", rtol=1e-9, atol=1e-11,
+                      t_out=t, inputs={"D": D, "tau_load": T})
+    w_dc = (p["k"] * p["V_bus"] * D - p["R"] * T) / (p["R"] * p["B"] + p["k"] ** 2)
+    mean = trapezoid(res["motor.inertia.w"], t) / period
+    assert mean == pytest.approx(w_dc, rel=1e-6)

@@ -37,3 +37,31 @@ def test_hoist_kinematics_and_energy_balance():
     # and it lifts: at the end the load rises at the steady speed
     assert vm[-1] == pytest.approx(steady_state(**p)["v_m"], rel=1e-6)
     assert h[-1] > 1.0
+
+
+def test_the_inputs_variant_driven_by_the_ramp_is_the_hoist():
+    """The voltage input given the ramp as a table, (0, 0) to (t_ramp, V), held: the
+    ``acausal`` hoist to 1e-9 (the ramp's kink is an event there and a table corner here,
+    which the integrator meets within its tolerance, 1e-12)."""
+    from mechatron.models.planetary_hoist import ramp_input
+    t = np.linspace(0, 1.0, 201)
+    ref = mt.simulate(ENTRY.build("acausal"), 1.0, t_out=t, rtol=1e-12, atol=1e-14)
+    cm = mt.compile_model(ENTRY.build("inputs"))
+    assert cm.input_names == ["V", "F_load"]
+    res = mt.simulate(cm, 1.0, t_out=t, rtol=1e-12, atol=1e-14,
+                      inputs=ramp_input(ENTRY.values(), 1.0))
+    for path in ENTRY.output_paths("inputs").values():
+        np.testing.assert_allclose(res[path], ref[path], rtol=0,
+                                   atol=1e-9 * np.abs(ref[path]).max())
+
+
+def test_a_load_force_input_is_a_heavier_load():
+    """A load force F pulling down: the steady state of a mass m + F / g."""
+    values = ENTRY.values()
+    F = 5.0
+    res = mt.simulate(ENTRY.build("inputs"), 2.0, rtol=1e-9, atol=1e-11,
+                      inputs={"V": 24.0, "F_load": F})
+    expect = steady_state(**dict(values, m=values["m"] + F / values["g"]))
+    assert res.final("motor.inertia.w") == pytest.approx(expect["w"], rel=1e-6)
+    assert res.final("motor.inductor.i") == pytest.approx(expect["i"], rel=1e-6)
+    assert res.final("rope.s_rel") == pytest.approx(expect["L_r"], rel=1e-6)

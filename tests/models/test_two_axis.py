@@ -37,3 +37,26 @@ def test_a_load_torque_taken_from_the_axis_parameters():
     b = mt.simulate(ENTRY.build("acausal", J_load=4e-5), 2e-3, rtol=1e-10, atol=1e-12)
     assert b.final("x.load.w") < a.final("x.load.w")
     assert b.final("x.motor.inertia.w") == b.final("x.load.w")
+
+
+def test_the_inputs_variant_driven_by_the_steps_is_the_table():
+    """Voltage inputs at the steps' values and no load: the ``acausal`` table to 1e-9."""
+    t = np.linspace(0, 0.1, 51)
+    ref = mt.simulate(ENTRY.build("acausal"), 0.1, t_out=t, rtol=1e-11, atol=1e-13)
+    cm = mt.compile_model(ENTRY.build("inputs"))
+    assert cm.input_names == ["V_x", "tau_x", "V_y", "tau_y"]
+    res = mt.simulate(cm, 0.1, t_out=t, rtol=1e-11, atol=1e-13,
+                      inputs={"V_x": 19.2, "V_y": 12.0, "tau_x": 0.0, "tau_y": 0.0})
+    for path in ENTRY.output_paths("inputs").values():
+        np.testing.assert_allclose(res[path], ref[path], rtol=0,
+                                   atol=1e-9 * np.abs(ref[path]).max())
+
+
+def test_load_torque_inputs_slow_each_axis_to_the_analytic_speed():
+    """Final speed under a load torque T: (k V - R T) / (R (B + D_load) + k^2)."""
+    R, k, B_t = 7.1, 0.151, 1.236e-4 + 5e-5
+    res = mt.simulate(ENTRY.build("inputs"), 0.5, rtol=1e-10, atol=1e-12,
+                      inputs={"V_x": 12.0, "tau_x": 0.01, "V_y": -6.0, "tau_y": -0.002})
+    for ax, V, T in (("x", 12.0, 0.01), ("y", -6.0, -0.002)):
+        assert res.final(f"{ax}.load.w") == pytest.approx((k * V - R * T) / (R * B_t + k * k),
+                                                         rel=1e-7)

@@ -44,6 +44,19 @@ def compile_model(model: Component, *, name: str | None = None,
             gc.enable()
 
 
+def _external_blocks(model: Component) -> list[dict]:
+    """What each part stepped outside the model's functions needs (an imported FMU, see
+    :mod:`mechatron.fmi`): the ``external_block()`` of every such part, in tree order."""
+    out, stack = [], [model]
+    while stack:
+        el = stack.pop()
+        describe = getattr(el, "external_block", None)
+        if describe is not None:
+            out.append(describe())
+        stack.extend(reversed(list(el.components.values())))
+    return out
+
+
 def _logged_expressions(flat, alias) -> list:
     """Every variable of the model as an expression of the unknowns: itself, or a scaled
     representative or a constant when alias elimination removed it. Scaled in bulk (one
@@ -245,6 +258,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         "relation_labels": list(events.labels),
         "discrete": dict(flat.discrete),
         "initial_equations": [str(eq.origin) for eq in flat.initial_equations],
+        "external_blocks": _external_blocks(model),
         "timings": timings,
     }
     cm = CompiledModel(

@@ -8,6 +8,12 @@ one second-order system in the motor speed:
 ``L di/dt = V - R i - k w`` and
 ``(J + M m^2 / eta) dw/dt = k i - (B + b m^2 / eta) w``, with ``v = m w``.
 Final speed: ``w = k V / (R (B + b m^2 / eta) + k^2)``.
+
+Variants: ``acausal`` (library parts), ``equation`` (the two ODEs) and ``inputs`` (the
+network driven from outside: the armature voltage ``V`` and a load force ``F_load`` on
+the carriage, opposing its motion, are the model's external inputs; start values ``V``
+and 0, so by default it is the ``acausal`` axis). With a load force ``F`` (the motor still
+driving) the final speed is ``w = (k V - R m F / eta) / (R (B + b m^2 / eta) + k^2)``.
 """
 
 from __future__ import annotations
@@ -102,6 +108,39 @@ def _acausal(V, R, L, k, J, B, lead, eta, M, b):
     return m
 
 
+def _inputs(V, R, L, k, J, B, lead, eta, M, b):
+    """The axis driven from outside: a controlled voltage source on the armature and a
+    force source on the carriage (reaction ``-F_load`` on the carriage)."""
+    m = mt.System("ball_screw_axis", doc="ball-screw axis with external inputs")
+    u = m.input("V", unit="V", start=V, doc="Armature voltage")
+    f_load = m.input("F_load", unit="N", start=0.0, doc="Load force, opposing motion")
+    source = m.add("source", el.ControlledVoltageSource())
+    resistor = m.add("resistor", el.Resistor(R=R))
+    inductor = m.add("inductor", el.Inductor(L=L))
+    emf = m.add("emf", em.RotationalEMF(k=k))
+    rotor = m.add("rotor", rot.Inertia(J=J))
+    bearing = m.add("bearing", rot.RotationalDamper(D=B))
+    screw = m.add("screw", mech.LeadScrew(lead=lead, eta=eta))
+    carriage = m.add("carriage", tr.Mass(m=M))
+    guide = m.add("guide", tr.TranslationalDamper(b=b))
+    position = m.add("position", tr.PositionSensor())
+    load = m.add("load", tr.IdealForceSource())
+    ground = m.add("ground", el.ElectricalReference())
+    housing = m.add("housing", rot.RotationalReference())
+    bed = m.add("bed", tr.TranslationalReference())
+    m.connect(u, source.u)
+    m.connect(f_load, load.f_in)
+    m.connect(source.p, resistor.p)
+    m.connect(resistor.n, inductor.p)
+    m.connect(inductor.n, emf.p)
+    m.connect(emf.n, source.n, ground.port)
+    m.connect(emf.A, rotor.port, bearing.A, screw.R)
+    m.connect(emf.B, bearing.B, housing.port)
+    m.connect(screw.T, carriage.port, guide.A, position.A, load.B)
+    m.connect(guide.B, position.B, load.A, bed.port)
+    return m
+
+
 def _equation(**values):
     m = BallScrewEquation(**values)
     m._name = "ball_screw_axis"
@@ -127,9 +166,11 @@ ENTRY = register(ModelEntry(
     description=("Linear axis: the seed's DC motor drives a carriage through a ball screw "
                  "with efficiency; electrical, rotational and translational domains."),
     parameters=_PARAMS,
-    variants={"acausal": _acausal, "equation": _equation},
+    variants={"acausal": _acausal, "equation": _equation, "inputs": _inputs},
     outputs={"acausal": {"w": "rotor.w", "v": "carriage.v", "x": "position.x",
                          "i": "inductor.i"},
+             "inputs": {"w": "rotor.w", "v": "carriage.v", "x": "position.x",
+                        "i": "inductor.i"},
              "equation": {"w": "w", "v": "v", "x": "x", "i": "i"}},
     output_units={"w": "rad/s", "v": "m/s", "x": "m", "i": "A"},
     experiment=Experiment(t_stop=0.1, rtol=1e-10, atol=1e-12),

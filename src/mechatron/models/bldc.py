@@ -41,10 +41,16 @@ PWM modes (chosen when the model is built, by the parameter ``f_pwm``):
   rectification: while its high-side switch is off, its low-side switch is on. Every edge
   is an event; about ``2 f_pwm`` events per second, so slower to simulate.
 
-Two variants:
+Variants:
 
 * ``acausal``: the physical network (library MOSFETs, DC source, rotational parts) and
   the user components of this module;
+* ``inputs``: the same network without the speed controller, driven from outside: the
+  duty cycle ``d`` (start 0) and the load torque ``T_load`` (start: the parameter
+  ``T_load``), opposing rotation, are the model's external inputs, for an outside
+  controller (HIL, an FMU importer, estimation). An open-loop plant, so it is not compared
+  with the closed-loop variants (``driven_variants``); its test closes the loop around it
+  with :class:`SpeedPI`;
 * ``equation``: the same drive as one set of equations: phase currents of the winding,
   the inverter legs as piecewise-linear switch and diode conductances solved in closed
   form per leg, the gate logic written from the Hall signals (not from the sector
@@ -293,9 +299,12 @@ class InverterLeg(mt.Component):
 # -- the two variants ----------------------------------------------------------------------
 
 def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R_on,
-                  G_off, V_f, R_d, f_pwm, V_g=12.0):
-    """The drive as a physical network (see the module docstring)."""
-    m = mt.System("bldc_motor", doc="BLDC motor, six-step commutation, PI speed loop")
+                  G_off, V_f, R_d, f_pwm, V_g=12.0, inputs=False):
+    """The drive as a physical network (see the module docstring); ``inputs``: without
+    the speed controller, the duty cycle ``d`` and the load torque ``T_load`` are the
+    model's external inputs (the ``inputs`` variant)."""
+    m = mt.System("bldc_motor", doc="BLDC motor, six-step commutation, "
+                  + ("external duty cycle and load torque" if inputs else "PI speed loop"))
     ground = m.add("ground", el.ElectricalReference())
     if f_pwm > 0:
         supply = m.add("supply", el.DCVoltageSource(V=V_dc))
@@ -304,8 +313,14 @@ def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R
         supply = m.add("supply", DutyScaledSource(V_dc=V_dc))
         full_on = m.add("pwm_on", mt.library.blocks.Constant(value=1.0))
     commutation = m.add("commutation", SixStepCommutation())
-    controller = m.add("controller", SpeedPI(w_ref=w_ref, K_p=K_p, K_i=K_i, K_aw=K_aw,
-                                             d_max=d_max))
+    if inputs:
+        controller = None
+        duty = m.input("d", unit="1", start=0.0, doc="Duty cycle of the PWM leg")
+        torque = m.input("T_load", unit="N*m", start=T_load,
+                         doc="Load torque, opposing rotation")
+    else:
+        controller = m.add("controller", SpeedPI(w_ref=w_ref, K_p=K_p, K_i=K_i,
+                                                 K_aw=K_aw, d_max=d_max))
     # the library machine: peak phase EMF p psi w = k_e w with one pole pair, the phase
     # inductance L_s_sigma + L_md = L, the drive's inertia and friction on its rotor
     motor = m.add("motor", PMSM(emf="trapezoidal", p=1.0, R_s=R, L_s_sigma=L, L_md=0.0,
@@ -313,7 +328,8 @@ def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R
                                 V_s_open_circuit=k_e * 2 * math.pi * F_NOM / math.sqrt(2),
                                 J_r=J, B_v=B))
     hall = m.add("hall", HallSensors())
-    load = m.add("load", rot.ConstantTorque(T=-T_load))
+    load = m.add("load", rot.IdealTorqueSource() if inputs else
+                 rot.ConstantTorque(T=-T_load))
     tacho = m.add("tacho", rot.AngularVelocitySensor())
     housing = m.add("housing", rot.RotationalReference())
     m.connect(supply.n, ground.port)
@@ -325,15 +341,22 @@ def build_acausal(V_dc, R, L, k_e, J, B, T_load, w_ref, K_p, K_i, K_aw, d_max, R
         m.connect(leg.out, getattr(motor, k))
         m.connect(getattr(commutation, f"g_{k}h"), leg.cmd_h)
         m.connect(getattr(commutation, f"g_{k}l"), leg.cmd_l)
-    m.connect(motor.flange, load.A, hall.A, tacho.A)
-    m.connect(motor.support, load.B, hall.B, tacho.B, housing.port)
+    # the input's torque source acts on the rotor at B: reaction -T_load, opposing
+    on_rotor, on_housing = (load.B, load.A) if inputs else (load.A, load.B)
+    m.connect(motor.flange, on_rotor, hall.A, tacho.A)
+    m.connect(motor.support, on_housing, hall.B, tacho.B, housing.port)
     m.connect(hall.sector, commutation.sector)
-    m.connect(tacho.W, controller.w)
+    if inputs:
+        m.connect(torque, load.tau_in)
+        d = duty
+    else:
+        m.connect(tacho.W, controller.w)
+        d = controller.d
     if f_pwm > 0:
-        m.connect(controller.d, modulator.d)
+        m.connect(d, modulator.d)
         m.connect(modulator.pwm, commutation.pwm)
     else:
-        m.connect(controller.d, supply.d)
+        m.connect(d, supply.d)
         m.connect(full_on.y, commutation.pwm)
     return m
 
@@ -486,6 +509,10 @@ def _equation(**values):
     return build_equation(**_check(values))
 
 
+def _inputs(**values):
+    return build_acausal(**_check(values), inputs=True)
+
+
 FET = "chosen: a 40 V logic-level MOSFET class"
 _PARAMS = {
     "V_dc": ParameterInfo("V", 24.0, "DC supply voltage", CHOSEN),
@@ -523,6 +550,9 @@ _OUTPUTS = {
                 "d": "controller.d"},
     "equation": {"sector": "sector", "w": "w", "i_a": "i_a", "i_b": "i_b", "i_c": "i_c",
                  "T": "T", "d": "d"},
+    "inputs": {"sector": "hall.sector", "w": "motor.inertia.w", "i_a": "motor.airgap.i_a",
+               "i_b": "motor.airgap.i_b", "i_c": "motor.airgap.i_c", "T": "motor.airgap.T",
+               "d": "d"},
 }
 
 ENTRY = register(ModelEntry(
@@ -532,7 +562,8 @@ ENTRY = register(ModelEntry(
                  "six-step commutation, PI speed control with (averaged or switched) PWM, "
                  "constant load torque."),
     parameters=_PARAMS,
-    variants={"acausal": _acausal, "equation": _equation},
+    variants={"acausal": _acausal, "equation": _equation, "inputs": _inputs},
+    driven_variants=("inputs",),
     outputs=_OUTPUTS,
     output_units={"sector": "1", "w": "rad/s", "i_a": "A", "i_b": "A", "i_c": "A",
                   "T": "N*m", "d": "1"},

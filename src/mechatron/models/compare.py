@@ -87,19 +87,25 @@ def compare_variants(entry: ModelEntry, *, params: dict | None = None,
                      atol: float | None = None, points: int = COMPARE_POINTS,
                      variants: list[str] | None = None) -> Comparison:
     """Simulate every variant of ``entry`` (default: its experiment's settings) on a common
-    grid of ``points`` output times and measure each output's deviation from the first."""
+    grid of ``points`` output times and measure each output's deviation from the first.
+
+    A variant with external inputs runs on the entry's ``reference_inputs`` (the signals
+    that reproduce the built-in sources); ``driven_variants`` (open-loop plants for an
+    outside controller) are left out unless named in ``variants``."""
     exp = entry.experiment
     params = params or {}
     t_stop = exp.t_stop if t_stop is None else t_stop
     grid = np.linspace(0.0, t_stop, points)
-    variants = list(variants or entry.variants)
+    variants = list(variants or [v for v in entry.variants
+                                 if v not in entry.driven_variants])
     results = {}
     for v in variants:
         results[v] = simulate(entry.build(v, **params), t_stop,
                               solver=solver or exp.solver,
                               dt=dt if dt is not None else exp.dt,
                               rtol=exp.rtol if rtol is None else rtol,
-                              atol=exp.atol if atol is None else atol, t_out=grid)
+                              atol=exp.atol if atol is None else atol, t_out=grid,
+                              inputs=entry.inputs_for(v, t_stop, **params))
     cmp = Comparison(entry, results)
     ref = variants[0]
     ref_paths = entry.output_paths(ref)

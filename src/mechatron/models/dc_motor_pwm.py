@@ -7,7 +7,9 @@ integrator, no Python per event. ``averaged``: the same motor fed by ``duty V``.
 integrator block logs the charge ``q = integral of i``, so the mean current over a run is
 ``q(T)/T``. The averaged drive's final speed is ``k duty V / (R B + k^2)``; the switched
 drive's mean current equals the averaged one's to within the ripple (checked to 1% in
-tests/solvers/test_hybrid_pwm.py).
+tests/solvers/test_hybrid_pwm.py). ``inputs``: the switched drive driven from outside,
+the duty cycle ``duty`` (latched each period; start: the parameter ``duty``) and a load
+torque ``tau_load`` (opposing rotation, start 0) as the model's external inputs.
 """
 
 from __future__ import annotations
@@ -26,11 +28,15 @@ SEED = "seed table 6-1, calculated"
 
 
 def pwm_motor(averaged: bool, *, V=19.2, R=7.1, L=3.408e-4, k=0.151, J=4.8e-6, B=1.236e-4,
-              duty=0.5, f_pwm=10e3) -> mt.System:
+              duty=0.5, f_pwm=10e3, inputs: bool = False) -> mt.System:
     """The DC motor behind a controlled voltage source, driven by a PWM of ``duty`` (or by
-    its average ``duty V``); ``charge`` integrates the armature current."""
+    its average ``duty V``); ``charge`` integrates the armature current. ``inputs``: the
+    duty cycle and a load torque are external inputs (the ``inputs`` variant)."""
     m = mt.System("dc_motor_pwm")
-    command = m.add("duty", blocks.Constant(value=duty))
+    if inputs:
+        command = m.input("duty", unit="1", start=duty, doc="Duty cycle, latched each period")
+    else:
+        command = m.add("duty", blocks.Constant(value=duty)).y
     drive = m.add("avg", blocks.Gain(k=V)) if averaged else \
         m.add("pwm", blocks.PWM(Ts=1 / f_pwm, amplitude=V))
     src = m.add("src", el.ControlledVoltageSource())
@@ -43,7 +49,7 @@ def pwm_motor(averaged: bool, *, V=19.2, R=7.1, L=3.408e-4, k=0.151, J=4.8e-6, B
     g = m.add("g", el.ElectricalReference())
     f = m.add("f", rot.RotationalReference())
     charge = m.add("charge", blocks.Integrator())
-    m.connect(command.y, drive.u)
+    m.connect(command, drive.u)
     m.connect(drive.y, src.u)
     m.connect(src.p, sensor.p)
     m.connect(sensor.n, r.p)
@@ -53,6 +59,12 @@ def pwm_motor(averaged: bool, *, V=19.2, R=7.1, L=3.408e-4, k=0.151, J=4.8e-6, B
     m.connect(emf.A, j.port, d.A)
     m.connect(emf.B, d.B, f.port)
     m.connect(sensor.I, charge.u)
+    if inputs:      # reaction -tau_load on the rotor
+        brake = m.add("load", rot.IdealTorqueSource())
+        m.connect(m.input("tau_load", unit="N*m", start=0.0,
+                          doc="Load torque, opposing rotation"), brake.tau_in)
+        m.connect(j.port, brake.B)
+        m.connect(f.port, brake.A)
     return m
 
 
@@ -73,8 +85,9 @@ ENTRY = register(ModelEntry(
                  "averaged drive: switching events inside the integrator."),
     parameters=_PARAMS,
     variants={"averaged": lambda **p: pwm_motor(True, **p),
-              "switched": lambda **p: pwm_motor(False, **p)},
-    outputs={v: {"w": "j.w", "q": "charge.y"} for v in ("averaged", "switched")},
+              "switched": lambda **p: pwm_motor(False, **p),
+              "inputs": lambda **p: pwm_motor(False, **p, inputs=True)},
+    outputs={v: {"w": "j.w", "q": "charge.y"} for v in ("averaged", "switched", "inputs")},
     output_units={"w": "rad/s", "q": "C"},
     experiment=Experiment(t_stop=0.1, rtol=1e-8, atol=1e-10),
     expected={"w": 0.151 * 0.5 * 19.2 / (7.1 * 1.236e-4 + 0.151 ** 2)},

@@ -39,6 +39,14 @@ class ModelEntry:
     ``build(variant=..., **params)`` returns a model instance; parameters are given by name
     (numbers in SI or quantity strings). ``outputs`` maps labels to instance paths, per
     variant. ``expected`` maps labels to reference final values of the default experiment.
+
+    ``reference_inputs`` maps a variant with external inputs (``simulate(inputs=...)``,
+    FMU inputs, HIL) to a function ``(values, t_stop) -> inputs`` giving the signals that
+    reproduce the built-in sources of the other variants (``values``: the parameters in
+    SI); a variant not listed runs on its inputs' start values, which then must do so.
+    ``driven_variants`` are variants whose inputs replace a controller of the others (an
+    open-loop plant for an outside controller): no fixed signal reproduces the closed
+    loop, so the variant comparison leaves them out (their tests close the loop).
     """
 
     name: str
@@ -55,6 +63,8 @@ class ModelEntry:
     variant_tolerance: float = 1e-6
     tags: tuple[str, ...] = ()
     default_variant: str = ""
+    reference_inputs: dict[str, Callable[..., dict]] = field(default_factory=dict)
+    driven_variants: tuple[str, ...] = ()
 
     def __post_init__(self):
         if not self.default_variant:
@@ -80,6 +90,17 @@ class ModelEntry:
             raise ModelError(f"model '{self.name}': no variant '{variant}'. Variants: "
                              f"{', '.join(self.variants)}.", path=self.name)
         return self.variants[variant](**self.values(**params))
+
+    def inputs_for(self, variant: str | None = None, t_stop: float | None = None,
+                   **params) -> dict | None:
+        """The external-input signals of ``variant`` that reproduce the built-in sources
+        of the other variants (see ``reference_inputs``), or None when its inputs' start
+        values do."""
+        fn = self.reference_inputs.get(variant or self.default_variant)
+        if fn is None:
+            return None
+        return fn(self.values(**params),
+                  self.experiment.t_stop if t_stop is None else t_stop)
 
     def output_paths(self, variant: str | None = None) -> dict[str, str]:
         return self.outputs[variant or self.default_variant]

@@ -23,7 +23,13 @@ edge (``a = exp(-D T / tau_f)``, ``c = exp(-T / tau_f)``, ``T = 1/f``)::
 and its mean is exactly ``D V_pwm`` (no DC current flows into the capacitor).
 
 Variants: ``acausal`` (PWMVoltageSource, Resistor, Capacitor, VoltageSensor, Gain,
-ControlledVoltageSource, and the motor as the library's DCPermanentMagnet subsystem) and ``equation`` (the three ODEs).
+ControlledVoltageSource, and the motor as the library's DCPermanentMagnet subsystem),
+``equation`` (the three ODEs) and ``inputs`` (the network driven from outside, as a
+microcontroller drives the real one: the duty cycle ``D`` is an external input, latched at
+each period start by a timer-style modulator (``blocks.PWM``, edge-aligned like the fixed
+source) whose output of 0 / ``V_pwm`` feeds the filter through a controlled source; a load
+torque ``tau_load`` on the motor shaft, opposing rotation, is the second input; start
+values ``D`` and 0, so by default it is the ``acausal`` circuit).
 """
 
 from __future__ import annotations
@@ -158,6 +164,41 @@ def _acausal(V_pwm, D, f, R_f, C_f, V_bus, R, L, k, J, B):
     return model
 
 
+def _inputs(V_pwm, D, f, R_f, C_f, V_bus, R, L, k, J, B):
+    """The circuit with the duty cycle and a load torque as external inputs."""
+    m = mt.System("hbridge_rc_filter", doc="PWM, RC filter, H-bridge and DC motor, "
+                  "external duty cycle and load torque")
+    duty = m.input("D", unit="1", start=D, doc="Duty cycle, latched at each PWM period")
+    load = m.input("tau_load", unit="N*m", start=0.0, doc="Load torque, opposing rotation")
+    modulator = m.add("modulator", blocks.PWM(Ts=1.0 / f, amplitude=V_pwm))
+    pwm = m.add("pwm", el.ControlledVoltageSource(doc="Microcontroller PWM output"))
+    r_f = m.add("r_f", el.Resistor(R=R_f))
+    c_f = m.add("c_f", el.Capacitor(C=C_f, v=0.0))
+    sense = m.add("sense", el.VoltageSensor())
+    gain = m.add("bridge_gain", blocks.Gain(k=V_bus / V_pwm))
+    bridge = m.add("bridge", el.ControlledVoltageSource())
+    motor = m.add("motor", machines.DCPermanentMagnet(R=R, L=L, k=k, J=J, B_v=B))
+    brake = m.add("load", rot.IdealTorqueSource())    # reaction -tau_load on the shaft
+    ground = m.add("ground", el.ElectricalReference())
+    bridge_ground = m.add("bridge_ground", el.ElectricalReference())
+    housing = m.add("housing", rot.RotationalReference())
+    motor.inductor._set("i", 0.0)
+    motor.inertia._set("w", 0.0)
+    m.connect(duty, modulator.u)
+    m.connect(modulator.y, pwm.u)
+    m.connect(load, brake.tau_in)
+    m.connect(pwm.p, r_f.p)
+    m.connect(r_f.n, c_f.p, sense.p)
+    m.connect(pwm.n, c_f.n, sense.n, ground.port)
+    m.connect(sense.V, gain.u)
+    m.connect(gain.y, bridge.u)
+    m.connect(bridge.p, motor.p)
+    m.connect(motor.n, bridge.n, bridge_ground.port)
+    m.connect(motor.flange, brake.B)
+    m.connect(motor.support, brake.A, housing.port)
+    return m
+
+
 def _equation(**values):
     model = HBridgeFilterEquation(**values)
     model._name = "hbridge_rc_filter"
@@ -186,8 +227,9 @@ ENTRY = register(ModelEntry(
                  "at 5 kHz, its output commanding an H-bridge that drives the seed's DC "
                  "motor."),
     parameters=_PARAMS,
-    variants={"acausal": _acausal, "equation": _equation},
+    variants={"acausal": _acausal, "equation": _equation, "inputs": _inputs},
     outputs={"acausal": {"v_f": "c_f.v", "i": "motor.inductor.i", "w": "motor.inertia.w"},
+             "inputs": {"v_f": "c_f.v", "i": "motor.inductor.i", "w": "motor.inertia.w"},
              "equation": {"v_f": "v_f", "i": "i", "w": "w"}},
     output_units={"v_f": "V", "i": "A", "w": "rad/s"},
     # 150 whole PWM periods: the motor's mechanical time constant is 1.4 ms, and the run

@@ -24,8 +24,12 @@ Limitations: the rope also pushes when slack (a spring-damper, not a rope); the 
 the drum are massless and lossless; no brake (at rest the load turns the motor backwards).
 
 Variants: ``acausal`` (library parts: ``RampVoltage``, ``DCPermanentMagnet``,
-``IdealPlanetary``, ``WheelAndAxle``, ``SpringDamper``, ``Mass``) and ``equation`` (the
-equations above as one user component).
+``IdealPlanetary``, ``WheelAndAxle``, ``SpringDamper``, ``Mass``), ``equation`` (the
+equations above as one user component) and ``inputs`` (the network driven from outside:
+the armature voltage ``V`` and a load force ``F_load``, pulling the mass down beside its
+weight, are the model's external inputs; start values ``V`` and 0; the ramp of the other
+variants is the input table ``(0, 0), (t_ramp, V)``, held). With a load force the
+steady state is that of a mass ``m + F_load / g``.
 """
 
 from __future__ import annotations
@@ -41,16 +45,26 @@ from mechatron.library import translational as tr
 from mechatron.models.entry import Experiment, ModelEntry, ParameterInfo
 from mechatron.models.registry import register
 
-__all__ = ["build_acausal", "HoistEquation", "steady_state", "ENTRY"]
+__all__ = ["build_acausal", "HoistEquation", "steady_state", "ramp_input", "ENTRY"]
 
 CHOSEN = "chosen: a small 24 V hoist"
 G_STANDARD = 9.80665
 
 
-def build_acausal(V, t_ramp, R, L, k, J, B, ratio, r, c, d, L_0, m, g):
-    """The hoist as a network of library parts."""
-    s = mt.System("planetary_hoist", doc="DC motor, planetary gear, drum, rope, load")
-    supply = s.add("supply", el.RampVoltage(V=V, duration=t_ramp))
+def build_acausal(V, t_ramp, R, L, k, J, B, ratio, r, c, d, L_0, m, g, *,
+                  inputs: bool = False):
+    """The hoist as a network of library parts; ``inputs``: the voltage and a load force
+    as external inputs (the ``inputs`` variant) instead of the ramp."""
+    s = mt.System("planetary_hoist", doc="DC motor, planetary gear, drum, rope, load"
+                  + (", external inputs" if inputs else ""))
+    if inputs:
+        u = s.input("V", unit="V", start=V, doc="Armature voltage")
+        f_load = s.input("F_load", unit="N", start=0.0,
+                         doc="Load force on the mass, pulling down")
+        supply = s.add("supply", el.ControlledVoltageSource())
+        s.connect(u, supply.u)
+    else:
+        supply = s.add("supply", el.RampVoltage(V=V, duration=t_ramp))
     motor = s.add("motor", machines.DCPermanentMagnet(R=R, L=L, k=k, J=J, B_v=B))
     gnd = s.add("gnd", el.ElectricalReference())
     gear = s.add("gear", rot.IdealPlanetary(ratio=ratio))
@@ -69,7 +83,23 @@ def build_acausal(V, t_ramp, R, L, k, J, B, ratio, r, c, d, L_0, m, g):
     s.connect(drum.T, rope.B)
     s.connect(rope.A, load.port, weight.A)
     s.connect(weight.B, ground.port)
+    if inputs:
+        pull = s.add("pull", tr.IdealForceSource())     # reaction -F_load on the mass
+        s.connect(f_load, pull.f_in)
+        s.connect(pull.B, load.port)
+        s.connect(pull.A, ground.port)
     return s
+
+
+def _inputs(**values):
+    return build_acausal(**values, inputs=True)
+
+
+def ramp_input(values: dict, t_stop: float) -> dict:
+    """The ``inputs`` variant's signals that reproduce the ramped supply: the voltage
+    table ``(0, 0), (t_ramp, V)`` (held after it) and no load force."""
+    t_ramp = values["t_ramp"]
+    return {"V": ([0.0, t_ramp], [0.0, values["V"]]), "F_load": 0.0}
 
 
 class HoistEquation(mt.Component):
@@ -151,9 +181,12 @@ ENTRY = register(ModelEntry(
     description=("A permanent-magnet DC motor lifts a mass through an ideal planetary "
                  "gear (ring held), a drum and an elastic rope, from a ramped supply."),
     parameters=_PARAMS,
-    variants={"acausal": build_acausal, "equation": _equation},
+    variants={"acausal": build_acausal, "equation": _equation, "inputs": _inputs},
+    reference_inputs={"inputs": ramp_input},
     outputs={"acausal": {"w": "motor.inertia.w", "i": "motor.inductor.i",
                          "v_m": "load.v", "L_r": "rope.s_rel"},
+             "inputs": {"w": "motor.inertia.w", "i": "motor.inductor.i",
+                        "v_m": "load.v", "L_r": "rope.s_rel"},
              "equation": {"w": "w", "i": "i", "v_m": "v_m", "L_r": "L_r"}},
     output_units={"w": "rad/s", "i": "A", "v_m": "m/s", "L_r": "m"},
     experiment=Experiment(t_stop=2.0, rtol=1e-9, atol=1e-11),

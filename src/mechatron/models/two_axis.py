@@ -17,7 +17,12 @@ so the final speed is ``k V / (R B_t + k^2)`` and the final current ``B_t V / (R
 k^2)``. The rotor and the load are two inertias on one shaft: index reduction makes one
 of them the state.
 
-Variants: ``acausal`` (the subsystems) and ``ode`` (the equations above, per axis).
+Variants: ``acausal`` (the subsystems), ``ode`` (the equations above, per axis) and
+``inputs`` (the subsystems driven from outside: the armature voltages ``V_x``, ``V_y``
+and the load torques ``tau_x``, ``tau_y``, opposing each load's rotation, are the model's
+external inputs; their start values are the voltage steps and no load, so by default it is
+the ``acausal`` table). With a load torque ``T`` the final speed of an axis is
+``(k V - R T) / (R B_t + k^2)``.
 """
 
 from __future__ import annotations
@@ -116,6 +121,28 @@ def _acausal(V_x, V_y, R, L, k, J, B, J_load, D_load):
     return m
 
 
+def _inputs(V_x, V_y, R, L, k, J, B, J_load, D_load):
+    """The table driven from outside: per axis a controlled voltage source on the
+    armature and a torque source on the load shaft (reaction ``-tau`` on the load)."""
+    m = mt.System("two_axis", doc="Two-axis table with external inputs")
+    ground = m.add("ground", el.ElectricalReference())
+    frame = m.add("frame", rot.RotationalReference())
+    for ax, V in (("x", V_x), ("y", V_y)):
+        v = m.input(f"V_{ax}", unit="V", start=V, doc=f"Armature voltage, axis {ax}")
+        tau = m.input(f"tau_{ax}", unit="N*m", start=0.0,
+                      doc=f"Load torque, axis {ax}, opposing rotation")
+        supply = m.add(f"supply_{ax}", el.ControlledVoltageSource())
+        axis = m.add(ax, MotorAxis(R=R, L=L, k=k, J=J, B=B, J_load=J_load, D_load=D_load))
+        brake = m.add(f"load_{ax}", rot.IdealTorqueSource())
+        m.connect(v, supply.u)
+        m.connect(tau, brake.tau_in)
+        m.connect(supply.p, axis.p)
+        m.connect(supply.n, axis.n, ground.port)
+        m.connect(axis.load.port, brake.B)
+        m.connect(axis.support, brake.A, frame.port)
+    return m
+
+
 def _ode(**values):
     m = TwoAxisODE(**values)
     m._name = "two_axis"
@@ -144,9 +171,11 @@ ENTRY = register(ModelEntry(
         "D_load": ParameterInfo("N*m*s/rad", 5e-5, "Load viscous friction per axis",
                                 CHOSEN),
     },
-    variants={"acausal": _acausal, "ode": _ode},
+    variants={"acausal": _acausal, "ode": _ode, "inputs": _inputs},
     outputs={"acausal": {"w_x": "x.load.w", "w_y": "y.load.w",
                          "i_x": "x.motor.inductor.i", "i_y": "y.motor.inductor.i"},
+             "inputs": {"w_x": "x.load.w", "w_y": "y.load.w",
+                        "i_x": "x.motor.inductor.i", "i_y": "y.motor.inductor.i"},
              "ode": {"w_x": "w_x", "w_y": "w_y", "i_x": "i_x", "i_y": "i_y"}},
     output_units={"w_x": "rad/s", "w_y": "rad/s", "i_x": "A", "i_y": "A"},
     experiment=Experiment(t_stop=0.3, rtol=1e-8, atol=1e-10),

@@ -86,6 +86,11 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         cm = model
     else:
         raise TypeError(f"simulate: expected a Component or CompiledModel, got {model!r}.")
+    if cm.report.get("external_blocks"):       # imported FMUs: a co-simulation
+        from mechatron.fmi.cosim import cosimulate
+        return cosimulate(cm, t_stop, solver=solver, dt=dt, params=params, inputs=inputs,
+                          rtol=rtol, atol=atol, t_out=t_out, t0=t0, iterations=iterations,
+                          max_step=max_step, newton=newton, compile_time=compile_time)
     if not np.isfinite(t_stop) or t_stop <= t0:
         raise SimulationError(f"model '{cm.name}': t_stop must be a number > t0 = {t0:g}, "
                               f"got {t_stop!r}.")

@@ -91,6 +91,12 @@ def prepare(model, *, solver: str = "rk4", dt: float, iterations: int = 3,
             name: str | None = None) -> Prepared:
     """Compile (if needed), initialize and build the step and output functions."""
     cm = _compiled(model)
+    blocks = [b["path"] for b in cm.report.get("external_blocks") or []]
+    if blocks:
+        raise CodegenError(f"model '{cm.name}': {', '.join(blocks)} is an imported FMU, "
+                           "which generated C cannot step (the co-simulation steps it from "
+                           "Python). Generate code for the model without it, or the FMU's "
+                           "own model.", path=cm.name)
     if solver not in METHODS:
         raise CodegenError(f"model '{cm.name}': unknown fixed-step solver '{solver}'. "
                            f"Choose one of {', '.join(METHODS)}.", path=cm.name)
