@@ -394,10 +394,17 @@ def _class_calls(el, method: str, where: str):
 
 def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connect, str]]:
     connects = []
+    templates: dict = {}           # class -> _Template, or None where none applies
     for el in elements:
         if not isinstance(el, Component):
             continue
         where = el.path or flat.name
+        tpl = _template(flat, el, templates)
+        if tpl is not None:
+            if "equations" in vars(type(el)):
+                flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
+            tpl.add(flat, el, where)
+            continue
         for klass, items in _class_calls(el, "equations", where):
             if klass is type(el):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
@@ -409,6 +416,9 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                     flat.events.append((item, el.path))
                     continue
                 _add_equation(flat, el, klass, k, item, problems)
+    for tpl in templates.values():
+        if tpl is not None:
+            tpl.instantiate()
     _discrete_states(flat, problems)
     pending = [eq for eq in flat.equations if eq.residual is None]
     if pending:
@@ -417,6 +427,172 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
         for eq, r in zip(pending, ca.vertsplit(res)):
             eq.residual = r
     return connects
+
+
+# -- one expression graph per component class ------------------------------------------------
+_PLAIN_KEYS = frozenset(("doc", "_name", "_parent", "_values", "_starts", "_syms",
+                         "_children", "_path_cache"))
+_TEMPLATE_PREFIX = "@"        # template symbols are named "@.<key>", "@.<port>.<key>"
+
+
+class _Template:
+    """The equations of a component class, written once over symbols of its own
+    (``@.v``, ``@.p.i``, ``@.R``, ``der(@.i)``) and instantiated for every instance of
+    the class by one mapped CasADi function: one expression graph built per class,
+    not one Python call per scalar operation per instance (issue 17).
+
+    Used for a class whose instances cannot differ in their equations: no attributes
+    beyond the declared ones, equations that are plain ``==`` over the component's own
+    variables, parameters, ports, their derivatives and time (no connections, events,
+    ``pre``, or variables of its parts). Any other class is flattened instance by
+    instance, as before."""
+
+    __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
+                 "equations", "n_eq")
+
+    def __init__(self, keys, ports, derived, syms, lhs, rhs):
+        self.keys = keys            # own declaration keys, in template order
+        self.ports = ports          # [(port name, [keys])]
+        self.derived = derived      # template positions whose derivative appears
+        self.svec = ca.vertcat(*syms)
+        self.lhs, self.rhs = lhs, rhs
+        self.n_eq = len(lhs)
+        self.fun = ca.Function("template", [self.svec],
+                               [ca.vertcat(*lhs) - ca.vertcat(*rhs)])
+        self.instances: list = []   # SX column of each instance's symbols
+        self.equations: list = []   # FlatEquation of each instance, in order
+
+    def add(self, flat: FlatModel, el, where: str) -> None:
+        syms = el._syms
+        args = [syms[k] for k in self.keys]
+        children = el._children
+        for port, keys in self.ports:
+            psyms = children[port]._syms
+            args.extend(psyms[k] for k in keys)
+        der = flat.context.der_symbol
+        args.extend([der(args[i].name()) for i in self.derived])
+        args.append(flat.context.time)
+        self.instances.append(args)
+        owner = el.path
+        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner)
+               for k in range(self.n_eq)]
+        self.equations.append(eqs)
+        flat.equations.extend(eqs)
+
+    def instantiate(self) -> None:
+        """Every instance's residuals from one call of the mapped function."""
+        n = len(self.instances)
+        if not n or not self.n_eq:
+            return
+        width = self.svec.numel()
+        flat_args = [a for args in self.instances for a in args]
+        columns = ca.reshape(ca.vertcat(*flat_args), width, n)
+        out = (self.fun.map(n)(columns) if n > 1 else self.fun(columns)).nonzeros()
+        k = 0
+        for eqs in self.equations:
+            for eq in eqs:
+                eq.residual = out[k]
+                k += 1
+
+
+class _TemplateOrigin:
+    """Origin of an equation instantiated from a `_Template`; its sides are formed (by
+    substitution) only when a message needs them."""
+
+    __slots__ = ("where", "template", "args", "k")
+
+    def __init__(self, where, template, args, k):
+        self.where, self.template, self.args, self.k = where, template, args, k
+
+    def _side(self, expr):
+        return ca.substitute(expr, self.template.svec, ca.vertcat(*self.args))
+
+    @property
+    def lhs(self):
+        return self._side(self.template.lhs[self.k])
+
+    @property
+    def rhs(self):
+        return self._side(self.template.rhs[self.k])
+
+    def __str__(self) -> str:
+        return f"{self.where}: {_short(self.lhs)} == {_short(self.rhs)}"
+
+    __repr__ = __str__
+
+
+def _template(flat: FlatModel, el, templates: dict):
+    """The `_Template` of ``el``'s class, built from ``el`` on first use; None if the
+    class does not qualify (see `_Template`)."""
+    cls = type(el)
+    if any(k not in _PLAIN_KEYS and k not in el._children for k in el.__dict__):
+        return None                 # instance attributes: equations may differ
+    if cls in templates:
+        return templates[cls]
+    templates[cls] = None
+    if not all(isinstance(c, Connector) and not c._children for c in el._children.values()):
+        return None                 # parts: equations may name their variables
+    if not hasattr(cls, "equations") or cls.equations is Component.equations:
+        return None
+    saved = el._syms
+    tsyms = {}
+    keys = list(saved)
+    own = []
+    for k in keys:
+        tsyms[k] = ca.SX.sym(f"{_TEMPLATE_PREFIX}.{k}")
+        own.append(tsyms[k])
+    ports = []
+    port_saved = {}
+    for name, c in el._children.items():
+        port_saved[name] = c._syms
+        csyms = {k: ca.SX.sym(f"{_TEMPLATE_PREFIX}.{name}.{k}") for k in c._syms}
+        ports.append((name, list(c._syms)))
+        own.extend(csyms.values())
+        c._syms = csyms
+    variables = {s.name() for k, s in tsyms.items()
+                 if not isinstance(cls._declarations.get(k), Parameter)}
+    variables |= {s.name() for s in own[len(keys):]}
+    tctx = BuildContext()
+    tctx.time = flat.context.time
+    tctx.unknowns = {s.name(): s for s in own if s.name() in variables}
+    el._syms = tsyms
+    lhs, rhs = [], []
+    try:
+        with tctx:
+            for klass, items in _class_calls(el, "equations", el.path or flat.name):
+                for item in _as_equations(items):
+                    if not isinstance(item, ca.SX):
+                        return None
+                    for j in range(item.numel()):
+                        e = item if item.is_scalar() else item[j]
+                        if not e.is_op(ca.OP_EQ):
+                            return None
+                        lhs.append(e.dep(0))
+                        rhs.append(e.dep(1))
+    except ModelError:
+        return None
+    finally:
+        el._syms = saved
+        for name, c in el._children.items():
+            c._syms = port_saved[name]
+    if tctx.pre or tctx.special:
+        return None
+    index = {s.name(): i for i, s in enumerate(own)}
+    derived, ders = [], []
+    for name, d in tctx.derivative.items():
+        if name not in index:       # der(der(x)): left to the instance-by-instance path
+            return None
+        derived.append(index[name])
+        ders.append(d)
+    allowed = set(index) | {d.name() for d in ders} | {flat.context.time.name()}
+    if lhs and any(s.name() not in allowed
+                   for s in ca.symvar(ca.vertcat(*lhs, *rhs))):
+        return None
+    # a parameter bound to an expression of the parent's parameters (Resistor(R=R/2))
+    # fills its slot with that expression
+    tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs)
+    templates[cls] = tpl
+    return tpl
 
 
 def _discrete_states(flat: FlatModel, problems) -> None:

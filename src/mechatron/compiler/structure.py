@@ -274,12 +274,16 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     def solvable(e: int, v: int) -> bool:
         return coefficient(e, v) is not None
 
+    bulk = _solve_singles(res, var_syms, [(b.equations[0], b.variables[0]) for b in blocks
+                                          if len(b.equations) == 1])
     for block in blocks:
         eqs, vs = block.equations, block.variables
         out.largest_block = max(out.largest_block, len(eqs))
         if len(eqs) == 1:
             e, v = eqs[0], vs[0]
-            quick = _explicit(res[e], var_syms[v])
+            quick = bulk.get(e)
+            if quick is None:
+                quick = _explicit(res[e], var_syms[v])
             if quick is not None:
                 out.assigned.append(var_syms[v])
                 out.assigned_expr.append(quick)
@@ -459,6 +463,48 @@ def _raise_singular_selection(name, eqs, candidates) -> None:
 
 def _is_symbol(expr: ca.SX, name: str) -> bool:
     return expr.is_symbolic() and expr.name() == name
+
+
+def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
+                   singles: list[tuple[int, int]]) -> dict[int, ca.SX]:
+    """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of them:
+    where the equations are linear in the block variables ``X`` with coefficients free
+    of them, ``e_i = sum_j J_ij x_j + b_i`` and ``x_i = -(b_i + sum_{j != i} J_ij x_j)
+    / J_ii`` (``b = e(X = 0)``). Returns ``{e: expression of x_v}`` for those; the others
+    (nonlinear, or a coefficient that is 0) are left to the equation-by-equation path."""
+    n = len(singles)
+    if n < 2:
+        return {}
+    E = ca.vertcat(*[res[e] for e, _ in singles])
+    X = ca.vertcat(*[var_syms[v] for _, v in singles])
+    J = ca.jacobian(E, X)
+    rows, cols = J.sparsity().get_triplet()
+    nonlinear = set()
+    if J.nnz():
+        dep = ca.jacobian_sparsity(J.nz[:], X)
+        ptr, _ = dep.get_crs()
+        nonlinear = {rows[k] for k in range(len(rows)) if ptr[k] != ptr[k + 1]}
+    diag = [False] * n
+    off_r, off_c = [], []
+    for r, c in zip(rows, cols):
+        if r == c:
+            diag[r] = True
+        else:
+            off_r.append(r)
+            off_c.append(c)
+    # a row is nonlinear also where its equation is nonlinear in a variable it has a
+    # zero Jacobian column for (never: the Jacobian holds every dependence), or where
+    # its own coefficient is missing or 0
+    d = ca.diag(J)
+    good = [i for i in range(n) if diag[i] and i not in nonlinear]
+    if not good:
+        return {}
+    b = ca.substitute(E, X, ca.DM.zeros(n))
+    off = ca.project(J, ca.Sparsity.triplet(n, n, off_r, off_c))
+    sol = -(b + ca.mtimes(off, X)) / d
+    parts = ca.vertsplit(sol)
+    dz = ca.vertsplit(d)
+    return {singles[i][0]: parts[i] for i in good if not dz[i].is_zero()}
 
 
 def _explicit(r: ca.SX, x: ca.SX):
