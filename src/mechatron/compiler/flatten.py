@@ -74,6 +74,9 @@ class FlatEquation:
     residual: ca.SX
     origin: object     # "r1: v == R*i" or "connect(r1.n, c1.p)"; str() formats it
     owner: str = ""    # path of the component the equation belongs to
+    #: what alias elimination would read off the residual, known from the class's
+    #: template: ("pair", a, b, s) for a == s*b, ("const", a, value), or ("none",)
+    alias: tuple | None = None
 
 
 @dataclass
@@ -293,21 +296,25 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
     expression of the parent's symbols, the value its value; units must agree."""
     path = _join(el.path, key)
     parent = el._parent
-    where = f"{el.describe()}: {key} = {expr.text}"
+    text = _expression_text(expr)
+
+    def where() -> str:             # formatted only for a message
+        return f"{el.describe()}: {key} = {text}"
+
     if parent is None or parent._syms is None:
-        problems.append(f"{where} refers to parameters of an enclosing component, but "
+        problems.append(f"{where()} refers to parameters of an enclosing component, but "
                         f"{el.describe()} has none. Give {key} a value.")
         return ca.SX.nan(), float("nan")
     decls = type(parent)._declarations
     missing = [n for n in expr.names if not isinstance(decls.get(n), Parameter)]
     if missing:
-        problems.append(f"{where}: {', '.join(missing)} is not a parameter of "
+        problems.append(f"{where()}: {', '.join(missing)} is not a parameter of "
                         f"{parent.describe()}. Pass on parameters of the class whose body "
                         "declares the part.")
         return ca.SX.nan(), float("nan")
     message = _binding_dimensions(expr, type(parent), decl.unit)
     if message:
-        problems.add(UnitError, f"{where}: {message}")
+        problems.add(UnitError, f"{where()}: {message}")
         return ca.SX.nan(), float("nan")
     sym = expr.evaluate(lambda n: parent._syms[n])
     sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
@@ -316,8 +323,19 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
     _check_range(el, key, decl, value, problems)
     flat.bound_parameters[path] = BoundParameter(
         path, sym, value, decl.unit, decl.doc, el.path,
-        f"{expr.text} of '{parent.path or flat.name}'")
+        f"{text} of '{parent.path or flat.name}'")
     return sym, value
+
+
+_TEXTS: dict = {}
+
+
+def _expression_text(expr) -> str:
+    """``expr.text``, formatted once per expression (shared by every copy of a part)."""
+    got = _TEXTS.get(id(expr))
+    if got is None or got[0] is not expr:
+        got = _TEXTS[id(expr)] = (expr, expr.text)
+    return got[1]
 
 
 _BINDING_CHECKS: dict = {}
@@ -448,19 +466,26 @@ class _Template:
     instance, as before."""
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
-                 "equations", "n_eq")
+                 "equations", "n_eq", "aliases", "relative")
 
-    def __init__(self, keys, ports, derived, syms, lhs, rhs):
+    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables):
         self.keys = keys            # own declaration keys, in template order
         self.ports = ports          # [(port name, [keys])]
         self.derived = derived      # template positions whose derivative appears
         self.svec = ca.vertcat(*syms)
         self.lhs, self.rhs = lhs, rhs
         self.n_eq = len(lhs)
-        self.fun = ca.Function("template", [self.svec],
-                               [ca.vertcat(*lhs) - ca.vertcat(*rhs)])
+        residuals = ca.vertcat(*lhs) - ca.vertcat(*rhs) if lhs else ca.SX(0, 1)
+        self.fun = ca.Function("template", [self.svec], [residuals])
         self.instances: list = []   # SX column of each instance's symbols
         self.equations: list = []   # FlatEquation of each instance, in order
+        # each slot's path relative to the instance, and the alias pattern of each
+        # equation over the slots (read once here, not once per instance)
+        self.relative = [f".{k}" for k in keys] + \
+            [f".{port}.{k}" for port, ks in ports for k in ks]
+        index = {s.name(): i for i, s in enumerate(syms)}
+        self.aliases = [_alias_pattern(r, index, variables)
+                        for r in ca.vertsplit(residuals)] if lhs else []
 
     def add(self, flat: FlatModel, el, where: str) -> None:
         syms = el._syms
@@ -474,7 +499,16 @@ class _Template:
         args.append(flat.context.time)
         self.instances.append(args)
         owner = el.path
-        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner)
+        prefix = owner
+        rel = self.relative
+        hints = [p if p[0] == "none" else
+                 ("pair", prefix + rel[p[1]], prefix + rel[p[2]], p[3]) if p[0] == "pair"
+                 else ("const", prefix + rel[p[1]], p[2]) for p in self.aliases]
+        if not prefix:              # the root: paths without the leading dot
+            hints = [h if h[0] == "none" else
+                     (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
+                     (h[0], h[1][1:], h[2]) for h in hints]
+        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hints[k])
                for k in range(self.n_eq)]
         self.equations.append(eqs)
         flat.equations.extend(eqs)
@@ -493,6 +527,36 @@ class _Template:
             for eq in eqs:
                 eq.residual = out[k]
                 k += 1
+
+
+def _alias_pattern(r: ca.SX, index: dict, variables: set) -> tuple:
+    """What `mechatron.compiler.alias.eliminate_aliases` reads off a residual, over
+    template slots: ("pair", slot_a, slot_b, s) for a == s*b, ("const", slot, value)
+    for a == value, else ("none",). The same rules as that pass, applied once per
+    class."""
+    def signed(expr):
+        sign = 1.0
+        while expr.is_op(ca.OP_NEG):
+            expr, sign = expr.dep(0), -sign
+        if expr.is_symbolic() and expr.name() in variables:
+            return index[expr.name()], sign
+        return None
+
+    if r.is_op(ca.OP_SUB) or r.is_op(ca.OP_ADD):
+        lhs, rhs = r.dep(0), r.dep(1)
+        sign = -1.0 if r.is_op(ca.OP_SUB) else 1.0
+        la, ra = signed(lhs), signed(rhs)
+        if la and ra:
+            return ("pair", la[0], ra[0], -sign * ra[1] / la[1])
+        if la and rhs.is_constant():
+            return ("const", la[0], -sign * float(rhs) / la[1])
+        if ra and lhs.is_constant():
+            return ("const", ra[0], -float(lhs) / (sign * ra[1]))
+        return ("none",)
+    one = signed(r)
+    if one:
+        return ("const", one[0], 0.0)
+    return ("none",)
 
 
 class _TemplateOrigin:
@@ -590,7 +654,8 @@ def _template(flat: FlatModel, el, templates: dict):
         return None
     # a parameter bound to an expression of the parent's parameters (Resistor(R=R/2))
     # fills its slot with that expression
-    tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs)
+    tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs,
+                    variables)
     templates[cls] = tpl
     return tpl
 

@@ -467,44 +467,53 @@ def _is_symbol(expr: ca.SX, name: str) -> bool:
 
 def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
                    singles: list[tuple[int, int]]) -> dict[int, ca.SX]:
-    """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of them:
-    where the equations are linear in the block variables ``X`` with coefficients free
-    of them, ``e_i = sum_j J_ij x_j + b_i`` and ``x_i = -(b_i + sum_{j != i} J_ij x_j)
-    / J_ii`` (``b = e(X = 0)``). Returns ``{e: expression of x_v}`` for those; the others
-    (nonlinear, or a coefficient that is 0) are left to the equation-by-equation path."""
+    """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
+    them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
+    where ``J = de/dx`` is free of ``x`` and not 0.
+
+    Every ``J`` comes from one Jacobian. ``e(x = 0)`` must zero the block's own variable
+    only, not the variables of other blocks that appear in ``e``: the blocks are
+    coloured so that no equation holds the variable of another block of its colour
+    (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
+    takes one substitution. Returns ``{e: expression of x}``; the others (not linear
+    in their variable) are left to the equation-by-equation path."""
     n = len(singles)
     if n < 2:
         return {}
     E = ca.vertcat(*[res[e] for e, _ in singles])
     X = ca.vertcat(*[var_syms[v] for _, v in singles])
-    J = ca.jacobian(E, X)
-    rows, cols = J.sparsity().get_triplet()
-    nonlinear = set()
-    if J.nnz():
-        dep = ca.jacobian_sparsity(J.nz[:], X)
-        ptr, _ = dep.get_crs()
-        nonlinear = {rows[k] for k in range(len(rows)) if ptr[k] != ptr[k + 1]}
-    diag = [False] * n
-    off_r, off_c = [], []
+    rows, cols = ca.jacobian_sparsity(E, X).get_triplet()
+    holds: list[list[int]] = [[] for _ in range(n)]     # other blocks' variables in i
+    held: list[list[int]] = [[] for _ in range(n)]      # blocks whose equation holds x_i
     for r, c in zip(rows, cols):
-        if r == c:
-            diag[r] = True
-        else:
-            off_r.append(r)
-            off_c.append(c)
-    # a row is nonlinear also where its equation is nonlinear in a variable it has a
-    # zero Jacobian column for (never: the Jacobian holds every dependence), or where
-    # its own coefficient is missing or 0
-    d = ca.diag(J)
-    good = [i for i in range(n) if diag[i] and i not in nonlinear]
-    if not good:
-        return {}
-    b = ca.substitute(E, X, ca.DM.zeros(n))
-    off = ca.project(J, ca.Sparsity.triplet(n, n, off_r, off_c))
-    sol = -(b + ca.mtimes(off, X)) / d
-    parts = ca.vertsplit(sol)
+        if r != c:
+            holds[r].append(c)
+            held[c].append(r)
+    d = ca.diag(ca.jacobian(E, X))
+    bad = set(ca.jacobian_sparsity(d, X).get_triplet()[0])   # J depends on the variable
     dz = ca.vertsplit(d)
-    return {singles[i][0]: parts[i] for i in good if not dz[i].is_zero()}
+    colour = [-1] * n
+    classes: list[list[int]] = []
+    for i in range(n):
+        if i in bad or dz[i].is_zero():
+            continue
+        taken = {colour[k] for k in holds[i]} | {colour[k] for k in held[i]}
+        c = 0
+        while c in taken:
+            c += 1
+        colour[i] = c
+        if c == len(classes):
+            classes.append([])
+        classes[c].append(i)
+    out: dict[int, ca.SX] = {}
+    for idx in classes:
+        ex = ca.vertcat(*[res[singles[i][0]] for i in idx])
+        xs = ca.vertcat(*[var_syms[singles[i][1]] for i in idx])
+        ds = ca.vertcat(*[dz[i] for i in idx])
+        rest = ca.substitute(ex, xs, ca.DM.zeros(len(idx)))
+        for i, sol in zip(idx, ca.vertsplit(-rest / ds)):
+            out[singles[i][0]] = sol
+    return out
 
 
 def _explicit(r: ca.SX, x: ca.SX):
