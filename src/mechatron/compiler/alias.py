@@ -143,6 +143,11 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
                     new.append(ca.SX(1.0))
                     factors.append(0.0)
             continue
+        if len(members) == 1:
+            best_name, best_f = members[0]
+            result.unknowns.append(best_name)
+            _merge_starts(result, flat, best_name, [(best_name, 1.0)])
+            continue
         best_name, best_f = max(members, key=lambda m: _rank(unknowns[m[0]], m[0] in
                                                              derivative))
         rep = unknowns[best_name].sym
