@@ -15,6 +15,7 @@ import pytest
 import mechatron as mt
 from mechatron.errors import StructuralError
 from mechatron.library import electrical as el
+from mechatron.library import electromechanical as em
 from mechatron.library import rotational as rot
 
 SIM = dict(rtol=1e-10, atol=1e-12)
@@ -187,26 +188,114 @@ def test_spring_in_series_with_a_torque_source_is_a_cut_set_and_compiles():
     np.testing.assert_allclose(res["s1.phi"], T / k, atol=1e-10)
 
 
-@pytest.mark.xfail(strict=True, raises=StructuralError,
-                   reason="a cut set closed through an ideal transformer's ratio (a "
-                          "parameter) is not reduced; see docs/compiler.md")
-def test_inductor_forced_through_an_ideal_transformer():
+# -- cut sets closed through a parameter: transformer, gear, gyrator -----------------------
+def transformer_cut_set(flip_l, order):
+    """DC current source I into the primary of an ideal transformer (ratio N); on the
+    secondary, R || C in series with an inductor: the inductor carries N * I, fixed by
+    the source through the ratio, a parameter."""
+    parts = {"i": el.DCCurrentSource(I=I_SRC), "x": el.IdealTransformer(N=2.0),
+             "r": el.Resistor(R=R), "c": el.Capacitor(C=C), "l": el.Inductor(L=L),
+             "g": el.ElectricalReference(), "g2": el.ElectricalReference()}
     m = mt.System("transformer_cut_set")
-    i = m.add("i", el.DCCurrentSource(I=1.0))
-    x = m.add("x", el.IdealTransformer(N=2.0))
-    r = m.add("r", el.Resistor(R=2.0))
-    c = m.add("c", el.Capacitor(C=1e-3))
-    ind = m.add("l", el.Inductor(L=1e-3))
-    g = m.add("g", el.ElectricalReference())
-    g2 = m.add("g2", el.ElectricalReference())
+    made = {k: m.add(k, parts[k]) for k in order}
+    i, x, r, c, ind, g, g2 = (made[k] for k in "i x r c l g g2".split())
+    lp, ln = (ind.n, ind.p) if flip_l else (ind.p, ind.n)
     m.connect(g.port, i.p)
     m.connect(i.n, x.p1)
     m.connect(x.n1, g.port)
     m.connect(x.p2, r.p, c.p)
+    m.connect(r.n, c.n, lp)
+    m.connect(ln, x.n2, g2.port)
+    return m
+
+
+@pytest.mark.parametrize("flip_l, order", [
+    (False, "i x r c l g g2".split()),
+    (True, "l c r g2 x g i".split()),
+    (True, "i x r c l g g2".split()),
+])
+def test_inductor_forced_through_an_ideal_transformer(flip_l, order):
+    """The secondary current is N I (power balance of the ideal transformer); it charges
+    R || C: v = N I R (1 - exp(-t / (R C))); the inductor current is constant, so its
+    voltage is 0 and the primary voltage is N times the capacitor's."""
+    N = 2.0
+    cm = mt.compile_model(transformer_cut_set(flip_l, order))
+    assert cm.state_names == ["c.v"]
+    res = mt.simulate(cm, 0.01, **SIM)
+    sign = -1.0 if flip_l else 1.0
+    np.testing.assert_allclose(sign * res["l.i"], N * I_SRC, atol=1e-10)
+    v = N * I_SRC * R * (1 - np.exp(-res.t / (R * C)))
+    np.testing.assert_allclose(res["c.v"], v, atol=1e-8)
+    np.testing.assert_allclose(res["l.v"], 0.0, atol=1e-8)
+    np.testing.assert_allclose(res["x.v1"], N * v, atol=1e-8)
+    # lossless: the power the source delivers is what R dissipates plus what C stores
+    np.testing.assert_allclose(res["x.v1"] * I_SRC,
+                               res["r.v"] ** 2 / R + res["c.v"] * res["c.i"], atol=1e-7)
+
+
+def test_transformer_ratio_stays_a_tunable_parameter():
+    """The reduced equation keeps N symbolic: a new ratio changes the forced current
+    without recompiling."""
+    cm = mt.compile_model(transformer_cut_set(False, "i x r c l g g2".split()))
+    res = mt.simulate(cm, 0.01, params={"x.N": 0.5}, **SIM)
+    np.testing.assert_allclose(res["l.i"], 0.5 * I_SRC, atol=1e-10)
+    np.testing.assert_allclose(res["c.v"], 0.5 * I_SRC * R * (1 - np.exp(-res.t / (R * C))),
+                               atol=1e-8)
+
+
+def gyrator_cut_set(k1, k2, gear_ratio=None):
+    """The transformer of `transformer_cut_set` built from two gyrators: a current
+    source drives RotationalEMF e1, whose flange turns e2 (directly, or through an
+    IdealGear), which feeds R || C and the inductor. e1 turns I into the torque k1 I,
+    the gear multiplies it by its ratio, e2 turns it back into a current, so the
+    inductor carries k1 * ratio / k2 * I: a cut set closed across two domains through
+    three parameters."""
+    m = mt.System("gyrator_cut_set")
+    g = m.add("g", el.ElectricalReference())
+    g2 = m.add("g2", el.ElectricalReference())
+    i = m.add("i", el.DCCurrentSource(I=I_SRC))
+    e1 = m.add("e1", em.RotationalEMF(k=k1))
+    e2 = m.add("e2", em.RotationalEMF(k=k2))
+    ref = m.add("ref", rot.RotationalReference())
+    r = m.add("r", el.Resistor(R=R))
+    c = m.add("c", el.Capacitor(C=C))
+    ind = m.add("l", el.Inductor(L=L))
+    m.connect(g.port, i.p)
+    m.connect(i.n, e1.p)
+    m.connect(e1.n, g.port)
+    if gear_ratio is None:
+        m.connect(e1.A, e2.A)
+    else:
+        gear = m.add("gear", rot.IdealGear(ratio=gear_ratio))
+        m.connect(e1.A, gear.A)
+        m.connect(gear.B, e2.A)
+    m.connect(e1.B, e2.B, ref.port)
+    m.connect(e2.p, r.p, c.p)
     m.connect(r.n, c.n, ind.p)
-    m.connect(ind.n, x.n2, g2.port)
-    res = mt.simulate(m, 0.01, **SIM)
-    np.testing.assert_allclose(np.abs(res["l.i"]), 2.0, atol=1e-8)   # N * I
+    m.connect(ind.n, e2.n, g2.port)
+    return m
+
+
+@pytest.mark.parametrize("gear_ratio", [None, 3.0])
+def test_inductor_forced_through_gyrators_and_a_gear(gear_ratio):
+    k1, k2 = 0.2, 0.5
+    cm = mt.compile_model(gyrator_cut_set(k1, k2, gear_ratio))
+    assert cm.state_names == ["c.v"]
+    res = mt.simulate(cm, 0.01, **SIM)
+    n = k1 * (gear_ratio or 1.0) / k2
+    np.testing.assert_allclose(res["l.i"], n * I_SRC, atol=1e-10)
+    v = n * I_SRC * R * (1 - np.exp(-res.t / (R * C)))
+    np.testing.assert_allclose(res["c.v"], v, atol=1e-8)
+    # torque balance on the shafts, and the back EMFs of one speed (times the ratio)
+    w2 = res["e2.w"]
+    np.testing.assert_allclose(res["e2.v"], k2 * w2, atol=1e-8)
+    np.testing.assert_allclose(res["e1.w"], (gear_ratio or 1.0) * w2, atol=1e-8)
+    # lossless: source power = R's dissipation + C's charging
+    np.testing.assert_allclose(res["e1.v"] * I_SRC,
+                               res["r.v"] ** 2 / R + res["c.v"] * res["c.i"], atol=1e-7)
+    if gear_ratio is not None:   # the ratio stays a parameter of the compiled model
+        res = mt.simulate(cm, 0.01, params={"gear.ratio": 1.5}, **SIM)
+        np.testing.assert_allclose(res["l.i"], k1 * 1.5 / k2 * I_SRC, atol=1e-10)
 
 
 # -- truly singular networks ---------------------------------------------------------------

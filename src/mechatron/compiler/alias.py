@@ -83,7 +83,16 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     for eq in flat.equations:
         r = eq.residual
         handled = False
-        if r.is_op(ca.OP_SUB) or r.is_op(ca.OP_ADD):
+        hint = eq.alias              # read off the class's template once (flatten)
+        if hint is not None:
+            if hint[0] == "pair":
+                handled = union(hint[1], hint[2], hint[3])
+            elif hint[0] == "const":
+                root, f = find(hint[1])
+                if root not in const:
+                    const[root] = hint[2] / f
+                    handled = True
+        elif r.is_op(ca.OP_SUB) or r.is_op(ca.OP_ADD):
             lhs, rhs = r.dep(0), r.dep(1)
             sign = -1.0 if r.is_op(ca.OP_SUB) else 1.0
             la, ra_ = _signed_symbol(lhs, unknowns), _signed_symbol(rhs, unknowns)
@@ -133,6 +142,11 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
                     old.append(derivative[name])
                     new.append(ca.SX(1.0))
                     factors.append(0.0)
+            continue
+        if len(members) == 1:
+            best_name, best_f = members[0]
+            result.unknowns.append(best_name)
+            _merge_starts(result, flat, best_name, [(best_name, 1.0)])
             continue
         best_name, best_f = max(members, key=lambda m: _rank(unknowns[m[0]], m[0] in
                                                              derivative))

@@ -426,7 +426,10 @@ def dimension_problems(flat, model=None) -> list[str]:
     ``check_dimensions = False`` are skipped.
     """
     symbols = _Symbols(flat)
-    eqs = flat.equations
+    # equations instantiated from one class's template have the same dimensions in
+    # every instance (same declarations, bound parameters checked to their units):
+    # the first instance stands for all
+    eqs = [eq for eq in flat.equations if _checked(eq)]
     rows = [eq.residual for eq in eqs]
     extra, extra_origins = _event_rows(flat)
     dims = infer(_function(rows + extra, symbols.vector), symbols.dims)
@@ -465,6 +468,11 @@ def dimension_problems(flat, model=None) -> list[str]:
             problems.append(f"{_describe(flat, owner)}: {_strip(text, owner)}: "
                             f"{namer.problem(dims[k])}. {_HINT}")
     return problems
+
+
+def _checked(eq) -> bool:
+    template = getattr(eq.origin, "template", None)
+    return template is None or eq.origin.args is template.instances[0]
 
 
 def check_dimensions(flat, model=None) -> None:

@@ -74,6 +74,9 @@ class FlatEquation:
     residual: ca.SX
     origin: object     # "r1: v == R*i" or "connect(r1.n, c1.p)"; str() formats it
     owner: str = ""    # path of the component the equation belongs to
+    #: what alias elimination would read off the residual, known from the class's
+    #: template: ("pair", a, b, s) for a == s*b, ("const", a, value), or ("none",)
+    alias: tuple | None = None
 
 
 @dataclass
@@ -293,21 +296,25 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
     expression of the parent's symbols, the value its value; units must agree."""
     path = _join(el.path, key)
     parent = el._parent
-    where = f"{el.describe()}: {key} = {expr.text}"
+    text = _expression_text(expr)
+
+    def where() -> str:             # formatted only for a message
+        return f"{el.describe()}: {key} = {text}"
+
     if parent is None or parent._syms is None:
-        problems.append(f"{where} refers to parameters of an enclosing component, but "
+        problems.append(f"{where()} refers to parameters of an enclosing component, but "
                         f"{el.describe()} has none. Give {key} a value.")
         return ca.SX.nan(), float("nan")
     decls = type(parent)._declarations
     missing = [n for n in expr.names if not isinstance(decls.get(n), Parameter)]
     if missing:
-        problems.append(f"{where}: {', '.join(missing)} is not a parameter of "
+        problems.append(f"{where()}: {', '.join(missing)} is not a parameter of "
                         f"{parent.describe()}. Pass on parameters of the class whose body "
                         "declares the part.")
         return ca.SX.nan(), float("nan")
     message = _binding_dimensions(expr, type(parent), decl.unit)
     if message:
-        problems.add(UnitError, f"{where}: {message}")
+        problems.add(UnitError, f"{where()}: {message}")
         return ca.SX.nan(), float("nan")
     sym = expr.evaluate(lambda n: parent._syms[n])
     sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
@@ -316,8 +323,19 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
     _check_range(el, key, decl, value, problems)
     flat.bound_parameters[path] = BoundParameter(
         path, sym, value, decl.unit, decl.doc, el.path,
-        f"{expr.text} of '{parent.path or flat.name}'")
+        f"{text} of '{parent.path or flat.name}'")
     return sym, value
+
+
+_TEXTS: dict = {}
+
+
+def _expression_text(expr) -> str:
+    """``expr.text``, formatted once per expression (shared by every copy of a part)."""
+    got = _TEXTS.get(id(expr))
+    if got is None or got[0] is not expr:
+        got = _TEXTS[id(expr)] = (expr, expr.text)
+    return got[1]
 
 
 _BINDING_CHECKS: dict = {}
@@ -394,10 +412,17 @@ def _class_calls(el, method: str, where: str):
 
 def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connect, str]]:
     connects = []
+    templates: dict = {}           # class -> _Template, or None where none applies
     for el in elements:
         if not isinstance(el, Component):
             continue
         where = el.path or flat.name
+        tpl = _template(flat, el, templates)
+        if tpl is not None:
+            if "equations" in vars(type(el)):
+                flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
+            tpl.add(flat, el, where)
+            continue
         for klass, items in _class_calls(el, "equations", where):
             if klass is type(el):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
@@ -409,6 +434,9 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                     flat.events.append((item, el.path))
                     continue
                 _add_equation(flat, el, klass, k, item, problems)
+    for tpl in templates.values():
+        if tpl is not None:
+            tpl.instantiate()
     _discrete_states(flat, problems)
     pending = [eq for eq in flat.equations if eq.residual is None]
     if pending:
@@ -417,6 +445,219 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
         for eq, r in zip(pending, ca.vertsplit(res)):
             eq.residual = r
     return connects
+
+
+# -- one expression graph per component class ------------------------------------------------
+_PLAIN_KEYS = frozenset(("doc", "_name", "_parent", "_values", "_starts", "_syms",
+                         "_children", "_path_cache"))
+_TEMPLATE_PREFIX = "@"        # template symbols are named "@.<key>", "@.<port>.<key>"
+
+
+class _Template:
+    """The equations of a component class, written once over symbols of its own
+    (``@.v``, ``@.p.i``, ``@.R``, ``der(@.i)``) and instantiated for every instance of
+    the class by one mapped CasADi function: one expression graph built per class,
+    not one Python call per scalar operation per instance (issue 17).
+
+    Used for a class whose instances cannot differ in their equations: no attributes
+    beyond the declared ones, equations that are plain ``==`` over the component's own
+    variables, parameters, ports, their derivatives and time (no connections, events,
+    ``pre``, or variables of its parts). Any other class is flattened instance by
+    instance, as before."""
+
+    __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
+                 "equations", "n_eq", "aliases", "relative")
+
+    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables):
+        self.keys = keys            # own declaration keys, in template order
+        self.ports = ports          # [(port name, [keys])]
+        self.derived = derived      # template positions whose derivative appears
+        self.svec = ca.vertcat(*syms)
+        self.lhs, self.rhs = lhs, rhs
+        self.n_eq = len(lhs)
+        residuals = ca.vertcat(*lhs) - ca.vertcat(*rhs) if lhs else ca.SX(0, 1)
+        self.fun = ca.Function("template", [self.svec], [residuals])
+        self.instances: list = []   # SX column of each instance's symbols
+        self.equations: list = []   # FlatEquation of each instance, in order
+        # each slot's path relative to the instance, and the alias pattern of each
+        # equation over the slots (read once here, not once per instance)
+        self.relative = [f".{k}" for k in keys] + \
+            [f".{port}.{k}" for port, ks in ports for k in ks]
+        index = {s.name(): i for i, s in enumerate(syms)}
+        self.aliases = [_alias_pattern(r, index, variables)
+                        for r in ca.vertsplit(residuals)] if lhs else []
+
+    def add(self, flat: FlatModel, el, where: str) -> None:
+        syms = el._syms
+        args = [syms[k] for k in self.keys]
+        children = el._children
+        for port, keys in self.ports:
+            psyms = children[port]._syms
+            args.extend(psyms[k] for k in keys)
+        der = flat.context.der_symbol
+        args.extend([der(args[i].name()) for i in self.derived])
+        args.append(flat.context.time)
+        self.instances.append(args)
+        owner = el.path
+        prefix = owner
+        rel = self.relative
+        hints = [p if p[0] == "none" else
+                 ("pair", prefix + rel[p[1]], prefix + rel[p[2]], p[3]) if p[0] == "pair"
+                 else ("const", prefix + rel[p[1]], p[2]) for p in self.aliases]
+        if not prefix:              # the root: paths without the leading dot
+            hints = [h if h[0] == "none" else
+                     (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
+                     (h[0], h[1][1:], h[2]) for h in hints]
+        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hints[k])
+               for k in range(self.n_eq)]
+        self.equations.append(eqs)
+        flat.equations.extend(eqs)
+
+    def instantiate(self) -> None:
+        """Every instance's residuals from one call of the mapped function."""
+        n = len(self.instances)
+        if not n or not self.n_eq:
+            return
+        width = self.svec.numel()
+        flat_args = [a for args in self.instances for a in args]
+        columns = ca.reshape(ca.vertcat(*flat_args), width, n)
+        out = (self.fun.map(n)(columns) if n > 1 else self.fun(columns)).nonzeros()
+        k = 0
+        for eqs in self.equations:
+            for eq in eqs:
+                eq.residual = out[k]
+                k += 1
+
+
+def _alias_pattern(r: ca.SX, index: dict, variables: set) -> tuple:
+    """What `mechatron.compiler.alias.eliminate_aliases` reads off a residual, over
+    template slots: ("pair", slot_a, slot_b, s) for a == s*b, ("const", slot, value)
+    for a == value, else ("none",). The same rules as that pass, applied once per
+    class."""
+    def signed(expr):
+        sign = 1.0
+        while expr.is_op(ca.OP_NEG):
+            expr, sign = expr.dep(0), -sign
+        if expr.is_symbolic() and expr.name() in variables:
+            return index[expr.name()], sign
+        return None
+
+    if r.is_op(ca.OP_SUB) or r.is_op(ca.OP_ADD):
+        lhs, rhs = r.dep(0), r.dep(1)
+        sign = -1.0 if r.is_op(ca.OP_SUB) else 1.0
+        la, ra = signed(lhs), signed(rhs)
+        if la and ra:
+            return ("pair", la[0], ra[0], -sign * ra[1] / la[1])
+        if la and rhs.is_constant():
+            return ("const", la[0], -sign * float(rhs) / la[1])
+        if ra and lhs.is_constant():
+            return ("const", ra[0], -float(lhs) / (sign * ra[1]))
+        return ("none",)
+    one = signed(r)
+    if one:
+        return ("const", one[0], 0.0)
+    return ("none",)
+
+
+class _TemplateOrigin:
+    """Origin of an equation instantiated from a `_Template`; its sides are formed (by
+    substitution) only when a message needs them."""
+
+    __slots__ = ("where", "template", "args", "k")
+
+    def __init__(self, where, template, args, k):
+        self.where, self.template, self.args, self.k = where, template, args, k
+
+    def _side(self, expr):
+        return ca.substitute(expr, self.template.svec, ca.vertcat(*self.args))
+
+    @property
+    def lhs(self):
+        return self._side(self.template.lhs[self.k])
+
+    @property
+    def rhs(self):
+        return self._side(self.template.rhs[self.k])
+
+    def __str__(self) -> str:
+        return f"{self.where}: {_short(self.lhs)} == {_short(self.rhs)}"
+
+    __repr__ = __str__
+
+
+def _template(flat: FlatModel, el, templates: dict):
+    """The `_Template` of ``el``'s class, built from ``el`` on first use; None if the
+    class does not qualify (see `_Template`)."""
+    cls = type(el)
+    if any(k not in _PLAIN_KEYS and k not in el._children for k in el.__dict__):
+        return None                 # instance attributes: equations may differ
+    if cls in templates:
+        return templates[cls]
+    templates[cls] = None
+    if not all(isinstance(c, Connector) and not c._children for c in el._children.values()):
+        return None                 # parts: equations may name their variables
+    if not hasattr(cls, "equations") or cls.equations is Component.equations:
+        return None
+    saved = el._syms
+    tsyms = {}
+    keys = list(saved)
+    own = []
+    for k in keys:
+        tsyms[k] = ca.SX.sym(f"{_TEMPLATE_PREFIX}.{k}")
+        own.append(tsyms[k])
+    ports = []
+    port_saved = {}
+    for name, c in el._children.items():
+        port_saved[name] = c._syms
+        csyms = {k: ca.SX.sym(f"{_TEMPLATE_PREFIX}.{name}.{k}") for k in c._syms}
+        ports.append((name, list(c._syms)))
+        own.extend(csyms.values())
+        c._syms = csyms
+    variables = {s.name() for k, s in tsyms.items()
+                 if not isinstance(cls._declarations.get(k), Parameter)}
+    variables |= {s.name() for s in own[len(keys):]}
+    tctx = BuildContext()
+    tctx.time = flat.context.time
+    tctx.unknowns = {s.name(): s for s in own if s.name() in variables}
+    el._syms = tsyms
+    lhs, rhs = [], []
+    try:
+        with tctx:
+            for klass, items in _class_calls(el, "equations", el.path or flat.name):
+                for item in _as_equations(items):
+                    if not isinstance(item, ca.SX):
+                        return None
+                    for j in range(item.numel()):
+                        e = item if item.is_scalar() else item[j]
+                        if not e.is_op(ca.OP_EQ):
+                            return None
+                        lhs.append(e.dep(0))
+                        rhs.append(e.dep(1))
+    except ModelError:
+        return None
+    finally:
+        el._syms = saved
+        for name, c in el._children.items():
+            c._syms = port_saved[name]
+    if tctx.pre or tctx.special:
+        return None
+    index = {s.name(): i for i, s in enumerate(own)}
+    derived, ders = [], []
+    for name, d in tctx.derivative.items():
+        if name not in index:       # der(der(x)): left to the instance-by-instance path
+            return None
+        derived.append(index[name])
+        ders.append(d)
+    allowed = set(index) | {d.name() for d in ders} | {flat.context.time.name()}
+    if lhs and any(s.name() not in allowed
+                   for s in ca.symvar(ca.vertcat(*lhs, *rhs))):
+        return None
+    # a parameter bound to an expression of the parent's parameters (Resistor(R=R/2))
+    # fills its slot with that expression
+    tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs,
+                    variables)
+    templates[cls] = tpl
+    return tpl
 
 
 def _discrete_states(flat: FlatModel, problems) -> None:

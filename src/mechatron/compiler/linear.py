@@ -27,12 +27,14 @@ no path to a reference. `reveal` reports it in physical terms.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import casadi as ca
 
 from mechatron.compiler.graph import maximum_matching
 from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
 from mechatron.compiler.graph.matching import augment_from
+from mechatron.compiler.graph.polynomial import Laurent, atom
 from mechatron.errors import StructuralError
 
 __all__ = ["Reduction", "Combined", "reveal", "owner_of"]
@@ -57,13 +59,22 @@ class Reduction:
         The reduced equations whose constraint the incidence hides (see `reveal`):
         index reduction sees their reduced form.
     const : list of set of int
-        Columns in which each equation is linear with a numeric coefficient.
+        Columns in which each equation is linear with a coefficient free of unknowns
+        (a number, or an expression of parameters).
+    atoms : list of SX
+        The parameter (or parameter expression) that each atom of a `Laurent`
+        coefficient stands for.
     """
 
     adj: list[list[int]]
     reduced: dict[int, tuple[dict, dict, list[int]]] = field(default_factory=dict)
     changed: list[int] = field(default_factory=list)
     const: list[set[int]] = field(default_factory=list)
+    atoms: list = field(default_factory=list)
+
+    def expression(self, a) -> ca.SX:
+        """Coefficient `a` (a number or a `Laurent` polynomial) as an expression."""
+        return _expression(a, self.atoms)
 
     def residual(self, e: int, res: list[ca.SX], var_syms: list[ca.SX]) -> ca.SX:
         """The reduced form of equation `e`: its linear part plus the other terms of the
@@ -71,13 +82,13 @@ class Reduction:
         linear, comb, _ = self.reduced[e]
         out = ca.SX(0)
         for v, a in sorted(linear.items()):
-            out = out + float(a) * var_syms[v]
+            out = out + self.expression(a) * var_syms[v]
         for k, m in sorted(comb.items()):
             cols = sorted(self.const[k])
             rest = ca.substitute(res[k], ca.vertcat(*[var_syms[v] for v in cols]),
                                  ca.DM.zeros(len(cols))) if cols else res[k]
             if not rest.is_zero():
-                out = out + float(m) * rest
+                out = out + self.expression(m) * rest
         return out
 
 
@@ -117,8 +128,14 @@ def owner_of(origin) -> str:
 def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
            var_names: list[str], var_to_diff: list[int], adj: list[list[int]],
            roles: dict[str, tuple[str, str, str, bool]] | None = None,
-           classes: dict[str, str] | None = None) -> Reduction:
-    """Reduce the numeric-linear part of the equations; raise on a dependency.
+           classes: dict[str, str] | None = None,
+           parameters: list[ca.SX] | None = None) -> Reduction:
+    """Reduce the linear part of the equations exactly; raise on a dependency.
+
+    An unknown's coefficient takes part when it is a number or an expression of
+    `parameters` alone (a transformer's ratio ``N``, ``-N``, ``1/N``): such
+    coefficients are exact `Laurent` polynomials in the parameters, so a cut set
+    closed through an ideal transformer or gear cancels exactly as one of ±1 does.
 
     Parameters
     ----------
@@ -132,6 +149,9 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         for messages.
     classes : dict, optional
         Class name of each component path, for messages ("sources v1 and v2").
+    parameters : list of SX, optional
+        The parameter symbols: coefficients that depend on them alone are exact
+        symbolic coefficients; default: only numeric coefficients are.
 
     Raises
     ------
@@ -146,12 +166,24 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     rows, cols = jac.sparsity().get_triplet()
     const: list[set[int]] = [set() for _ in res]
     linear: list[dict] = [{} for _ in res]
-    for r, c, z in zip(rows, cols, jac.nonzeros()):
+    nonzeros = jac.nonzeros()
+    symbolic = []
+    for k, z in enumerate(nonzeros):
         if z.is_constant():
-            const[r].add(c)
+            const[rows[k]].add(cols[k])
             value = float(z)
             if value:
-                linear[r][c] = exact(value)
+                linear[rows[k]][cols[k]] = exact(value)
+        else:
+            symbolic.append(k)
+    atoms: list = []
+    if parameters and symbolic:
+        for k, a in _parameter_coefficients([nonzeros[k] for k in symbolic],
+                                            parameters, atoms):
+            k = symbolic[k]
+            const[rows[k]].add(cols[k])
+            if a:
+                linear[rows[k]][cols[k]] = a
     eliminable = [d == -1 for d in var_to_diff]
     nonlinear = {}
 
@@ -166,7 +198,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     pure = [e for e in range(len(res))
             if not any(eliminable[v] for v in other_terms(e))]
     elim = exact_elimination(linear, eliminable, rows=pure)
-    out = Reduction([list(r) for r in adj], const=const)
+    out = Reduction([list(r) for r in adj], const=const, atoms=atoms)
     for e, row in elim.rows.items():
         comb = elim.combination(e) if elim.changed(e) else {e: 1}
         inc = dict.fromkeys(sorted(row))
@@ -178,6 +210,86 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         out.adj[e] = out.reduced[e][2]
     _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out,
                         linear, roles or {}, classes or {}, n)
+    return out
+
+
+def _parameter_coefficients(exprs: list[ca.SX], parameters: list[ca.SX], atoms: list):
+    """``(k, coefficient)`` for each of `exprs` that depends on `parameters` alone: a
+    `Laurent` polynomial in atoms (appended to `atoms`, each a parameter or a
+    parameter expression that is not a sum, product or quotient by a single term)."""
+    stack = ca.vertcat(*exprs)
+    names = {p.name() for p in parameters}
+    others = [s for s in ca.symvar(stack) if s.name() not in names]
+    if others:
+        sp = ca.jacobian_sparsity(stack, ca.vertcat(*others))
+        ptr, _ = sp.get_crs()
+        keep = [k for k in range(len(exprs)) if ptr[k] == ptr[k + 1]]
+    else:
+        keep = list(range(len(exprs)))
+    index: dict[str, int] = {}
+
+    def leaf(z: ca.SX):
+        key = str(z)
+        if key not in index:
+            index[key] = len(atoms)
+            atoms.append(z)
+        return atom(index[key])
+
+    def convert(z: ca.SX):
+        if z.is_constant():
+            return exact(float(z))
+        if z.is_symbolic():
+            return leaf(z)
+        op = z.op()
+        try:
+            if op == ca.OP_ADD:
+                return convert(z.dep(0)) + convert(z.dep(1))
+            if op == ca.OP_SUB:
+                return convert(z.dep(0)) - convert(z.dep(1))
+            if op == ca.OP_MUL:
+                return convert(z.dep(0)) * convert(z.dep(1))
+            if op == ca.OP_DIV:
+                return _divide(convert(z.dep(0)), convert(z.dep(1)))
+            if op == ca.OP_NEG:
+                return -convert(z.dep(0))
+            if op == ca.OP_SQ:
+                a = convert(z.dep(0))
+                return a * a
+            if op == ca.OP_TWICE:
+                return 2 * convert(z.dep(0))
+            if op == ca.OP_INV:
+                return _divide(1, convert(z.dep(0)))
+        except ZeroDivisionError:
+            pass
+        return leaf(z)
+
+    for k in keep:
+        try:
+            yield k, convert(exprs[k])
+        except (ZeroDivisionError, OverflowError, ValueError):   # 1/0, inf, nan
+            continue
+
+
+def _divide(a, b):
+    """``a / b`` exactly (`ZeroDivisionError` where not exact or `b` is 0)."""
+    if isinstance(a, Laurent) or isinstance(b, Laurent):
+        return a / b
+    return _norm(Fraction(a) / b)
+
+
+def _norm(x):
+    return x.numerator if type(x) is Fraction and x.denominator == 1 else x
+
+
+def _expression(a, atoms: list) -> ca.SX:
+    if not isinstance(a, Laurent):
+        return ca.SX(float(a))
+    out = ca.SX(0)
+    for mono, c in sorted(a.terms.items()):
+        term = ca.SX(float(c))
+        for k, e in mono:
+            term = term * (atoms[k] ** e if e != 1 else atoms[k])
+        out = out + term
     return out
 
 

@@ -145,7 +145,8 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
                 declared={n: i for i, n in enumerate(flat.variables)},
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
-                classes=dict(flat.components), physical=flat.physical_owners)
+                classes=dict(flat.components), physical=flat.physical_owners,
+                parameters=p_syms)
     lap("structure")
 
     # every logged variable as an expression of the unknowns

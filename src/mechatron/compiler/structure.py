@@ -51,6 +51,12 @@ def _csr(expr: ca.SX, syms: ca.SX) -> list[list[int]]:
     return [list(col[ptr[r]:ptr[r + 1]]) for r in range(sp.size1())]
 
 
+class _Singular(StructuralError):
+    """A loop of equations found numerically singular: it may be a cut set or loop
+    closed through a parameter coefficient, which the exact elimination with symbolic
+    coefficients reduces (see `lower`)."""
+
+
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
           syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
           start_guess, hints: dict[str, str],
@@ -58,7 +64,8 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
           declared: dict[str, int] | None = None,
           roles: dict[str, tuple[str, str, str, bool]] | None = None,
           classes: dict[str, str] | None = None,
-          physical: set[str] | None = None) -> Lowered:
+          physical: set[str] | None = None,
+          parameters: list[ca.SX] | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
@@ -90,6 +97,9 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     physical : set of str, optional
         Components with physical (conserving) ports: a singular algebraic loop through
         them is reported as a network problem, not as a loop of signal blocks.
+    parameters : list of SX, optional
+        Parameter symbols: linear coefficients that depend on them alone (a transformer
+        ratio) take part in the exact elimination of `mechatron.compiler.linear.reveal`.
 
     Notes
     -----
@@ -100,7 +110,30 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     reduction, then derivative order, then later declaration, see `declared`). The
     states, equations and generated code are then the same whatever
     BLAS kernel evaluates the Jacobian.
+
+    The exact elimination of `mechatron.compiler.linear.reveal` first works with the
+    numeric coefficients alone (network laws of ±1: cheap, and enough for nearly every
+    model). If an algebraic loop or the state selection then turns out singular, and
+    `parameters` are given, the equations are lowered again with coefficients that are
+    expressions of the parameters taken exactly (a cut set closed through a
+    transformer's or gear's ratio); only if that fails too is the model refused.
     """
+    args = (name, residuals, origins, unknowns, syms, derivative, time, start_guess,
+            hints, preference, declared, roles, classes, physical)
+    try:
+        return _lower(*args, None)
+    except _Singular:
+        if not parameters:
+            raise
+    try:
+        return _lower(*args, parameters)
+    except _Singular as exc:
+        raise StructuralError(str(exc), equations=exc.equations, variables=exc.variables,
+                              path=exc.path) from None
+
+
+def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_guess, hints,
+           preference, declared, roles, classes, physical, parameters) -> Lowered:
     # -- variables of the structural problem: unknowns and their derivatives -------------
     var_syms: list[ca.SX] = [syms[n] for n in unknowns]
     var_names: list[str] = list(unknowns)
@@ -126,7 +159,7 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     # constraints hidden in the linear network equations (a cut set of current sources
     # and inductors, a loop of voltage sources and capacitors) are exposed first
     reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
-                       classes)
+                       classes, parameters)
     try:
         ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
     except StructuralError as exc:
@@ -241,12 +274,16 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     def solvable(e: int, v: int) -> bool:
         return coefficient(e, v) is not None
 
+    bulk = _solve_singles(res, var_syms, [(b.equations[0], b.variables[0]) for b in blocks
+                                          if len(b.equations) == 1])
     for block in blocks:
         eqs, vs = block.equations, block.variables
         out.largest_block = max(out.largest_block, len(eqs))
         if len(eqs) == 1:
             e, v = eqs[0], vs[0]
-            quick = _explicit(res[e], var_syms[v])
+            quick = bulk.get(e)
+            if quick is None:
+                quick = _explicit(res[e], var_syms[v])
             if quick is not None:
                 out.assigned.append(var_syms[v])
                 out.assigned_expr.append(quick)
@@ -388,15 +425,15 @@ def _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
             owners.append(where)
     if any(w.startswith("connect(") or w in physical for w in owners):
         parts = [w for w in owners if not w.startswith("connect(")] or owners
-        raise StructuralError(
+        raise _Singular(
             f"model '{name}': the network equations of {', '.join(parts)} are singular "
             f"for {', '.join(var_names[v] for v in cols[:8])} with the parameter values "
-            "given: a parameter of 0, or a loop or cut set of ideal elements coupled "
-            "through a parameter (an ideal transformer's or gear's ratio), which the "
-            "compiler does not reduce. Check these parameters, or add a resistance (a "
+            "given: a parameter of 0, or parameters whose values make a loop or cut "
+            "set of ideal elements close (e.g. transformer ratios whose product is "
+            "exactly 1 around a loop). Check these parameters, or add a resistance (a "
             "damper or spring in mechanics) to that loop or cut set.",
             equations=[str(orig[e]) for e in eqs], variables=owners, path=name)
-    raise StructuralError(
+    raise _Singular(
         f"model '{name}': the algebraic loop through {', '.join(owners)} has no unique "
         f"solution (its {len(eqs)} equations are singular for "
         f"{', '.join(var_names[v] for v in cols[:8])} at the start values: a loop gain of "
@@ -415,7 +452,7 @@ def _singular(a: np.ndarray) -> bool:
 
 
 def _raise_singular_selection(name, eqs, candidates) -> None:
-    raise StructuralError(
+    raise _Singular(
         f"model '{name}': state selection is singular at the start values: the "
         f"constraints {'; '.join(str(e) for e in eqs[:6])} cannot be solved for "
         f"{', '.join(candidates[:8])} with the states chosen. The mechanism "
@@ -426,6 +463,57 @@ def _raise_singular_selection(name, eqs, candidates) -> None:
 
 def _is_symbol(expr: ca.SX, name: str) -> bool:
     return expr.is_symbolic() and expr.name() == name
+
+
+def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
+                   singles: list[tuple[int, int]]) -> dict[int, ca.SX]:
+    """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
+    them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
+    where ``J = de/dx`` is free of ``x`` and not 0.
+
+    Every ``J`` comes from one Jacobian. ``e(x = 0)`` must zero the block's own variable
+    only, not the variables of other blocks that appear in ``e``: the blocks are
+    coloured so that no equation holds the variable of another block of its colour
+    (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
+    takes one substitution. Returns ``{e: expression of x}``; the others (not linear
+    in their variable) are left to the equation-by-equation path."""
+    n = len(singles)
+    if n < 2:
+        return {}
+    E = ca.vertcat(*[res[e] for e, _ in singles])
+    X = ca.vertcat(*[var_syms[v] for _, v in singles])
+    rows, cols = ca.jacobian_sparsity(E, X).get_triplet()
+    holds: list[list[int]] = [[] for _ in range(n)]     # other blocks' variables in i
+    held: list[list[int]] = [[] for _ in range(n)]      # blocks whose equation holds x_i
+    for r, c in zip(rows, cols):
+        if r != c:
+            holds[r].append(c)
+            held[c].append(r)
+    d = ca.diag(ca.jacobian(E, X))
+    bad = set(ca.jacobian_sparsity(d, X).get_triplet()[0])   # J depends on the variable
+    dz = ca.vertsplit(d)
+    colour = [-1] * n
+    classes: list[list[int]] = []
+    for i in range(n):
+        if i in bad or dz[i].is_zero():
+            continue
+        taken = {colour[k] for k in holds[i]} | {colour[k] for k in held[i]}
+        c = 0
+        while c in taken:
+            c += 1
+        colour[i] = c
+        if c == len(classes):
+            classes.append([])
+        classes[c].append(i)
+    out: dict[int, ca.SX] = {}
+    for idx in classes:
+        ex = ca.vertcat(*[res[singles[i][0]] for i in idx])
+        xs = ca.vertcat(*[var_syms[singles[i][1]] for i in idx])
+        ds = ca.vertcat(*[dz[i] for i in idx])
+        rest = ca.substitute(ex, xs, ca.DM.zeros(len(idx)))
+        for i, sol in zip(idx, ca.vertsplit(-rest / ds)):
+            out[singles[i][0]] = sol
+    return out
 
 
 def _explicit(r: ca.SX, x: ca.SX):

@@ -35,9 +35,11 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from numbers import Rational
 
+from mechatron.compiler.graph.polynomial import Laurent
+
 __all__ = ["LinearElimination", "exact_elimination", "exact"]
 
-Coefficient = int | Fraction
+Coefficient = int | Fraction | Laurent
 
 
 def exact(value: float) -> Coefficient:
@@ -59,14 +61,18 @@ class LinearElimination:
         For every other equation ``e`` taking part: its reduced linear part
         ``{column: coefficient}`` (no eliminable column left, exact zeros dropped).
     updates : dict of int to list
-        ``updates[e]``: the ``(pivot equation, multiplier)`` pairs subtracted from
-        equation ``e``, in order, each pivot equation in the form it had when it became
-        a pivot. `combination` turns them into multipliers of the given equations.
+        ``updates[e]``: the ``(pivot equation, multiplier, scale)`` steps applied to
+        equation ``e``, in order: ``e := scale * e - multiplier * pivot``, each pivot
+        equation in the form it had when it became a pivot. The scale is 1 except after
+        a pivot on a coefficient that depends on parameters (fraction-free: no
+        division by a parameter expression). `combination` turns them into multipliers
+        of the given equations.
     """
 
     pivots: dict[int, int]
     rows: dict[int, dict[int, Coefficient]]
-    updates: dict[int, list[tuple[int, Coefficient]]] = field(default_factory=dict)
+    updates: dict[int, list[tuple[int, Coefficient, Coefficient]]] = \
+        field(default_factory=dict)
     _memo: dict[int, dict[int, Coefficient]] = field(default_factory=dict, repr=False)
 
     def changed(self, e: int) -> bool:
@@ -75,7 +81,8 @@ class LinearElimination:
 
     def combination(self, e: int) -> dict[int, Coefficient]:
         """Multipliers ``{equation: m}`` of the given equations whose sum is the reduced
-        (or, for a pivot, the pivoting) form of equation `e`; `e` itself has m = 1.
+        (or, for a pivot, the pivoting) form of equation `e`; `e` itself has m = 1,
+        or the product of the scales of its fraction-free steps.
 
         Computed on demand, from the pivot equations `e` depends on only: a long chain
         of pivots that no reduced equation touches costs nothing."""
@@ -91,12 +98,14 @@ class LinearElimination:
                 continue
             seen.add(f)
             stack.append((f, True))
-            for p, _ in self.updates.get(f, ()):
+            for p, _, _ in self.updates.get(f, ()):
                 if p not in self._memo and p not in seen:
                     stack.append((p, False))
         for f in order:
             comb: dict[int, Coefficient] = {f: 1}
-            for p, m in self.updates.get(f, ()):
+            for p, m, s in self.updates.get(f, ()):
+                if s != 1:
+                    comb = {g: s * c for g, c in comb.items()}
                 for g, b in self._memo[p].items():
                     new = _norm(comb.get(g, 0) - m * b)
                     if new:
@@ -116,9 +125,10 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     ----------
     linear : sequence of mapping
         ``linear[e]`` maps each column (variable index) that appears in equation ``e``
-        linearly with a numeric coefficient to that coefficient (``int`` or
-        ``Fraction``; use `exact` on floats). Other terms of the equation are the
-        caller's business: they ride along unchanged in the combinations.
+        linearly with a coefficient free of unknowns to that coefficient: ``int`` or
+        ``Fraction`` (use `exact` on floats), or a `Laurent` polynomial in parameters.
+        Other terms of the equation are the caller's business: they ride along
+        unchanged in the combinations.
     eliminable : sequence of bool
         ``eliminable[v]``: whether column ``v`` may be eliminated (a pivot column).
     rows : sequence of int, optional
@@ -140,7 +150,13 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     on the given equations keeps each reduced equation a short combination (in a
     network: the elements of one loop or cut set, not a path across the whole circuit).
     Ties go to the lowest index, so the result depends only on the input. Arithmetic is
-    exact (``int`` and ``Fraction``).
+    exact (``int``, ``Fraction`` and `Laurent`).
+
+    A coefficient that depends on parameters is pivoted on only where no numeric one
+    is left in its column; it is then taken as nonzero (as Modelica tools take a
+    parameter that a structural decision divides by: a transformer ratio or a gear
+    ratio of 0 is no transformer or gear), and the step is fraction-free
+    (``f := a * f - b * e``), so no reduced equation divides by a parameter.
     """
     n_var = len(eliminable)
     ok = [bool(x) for x in eliminable]
@@ -193,12 +209,20 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         del col_rows[v]
         prow = work[e]
         a = prow[v]
+        symbolic = isinstance(a, Laurent)
         for f in others:
             frow = work[f]
-            m = _ratio(frow[v], a)
-            updates.setdefault(f, []).append((e, m))
+            if symbolic:            # fraction-free: f := a * f - frow[v] * e
+                s, m = a, frow[v]
+                for u in frow:
+                    if u not in prow:
+                        frow[u] = a * frow[u]
+            else:
+                s, m = 1, _ratio(frow[v], a)
+            updates.setdefault(f, []).append((e, m, s))
             for u, b in prow.items():
-                new = _norm(frow.get(u, 0) - m * b)
+                new = _norm(s * frow.get(u, 0) - m * b) if symbolic else \
+                    _norm(frow.get(u, 0) - m * b)
                 was = u in frow
                 if new:
                     frow[u] = new
@@ -241,16 +265,20 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
                 break
         if chosen is None:
             break
-        e = min(col_rows[chosen], key=lambda f: (count[f], len(updates.get(f, ())), f))
+        e = min(col_rows[chosen], key=lambda f: (isinstance(work[f][chosen], Laurent),
+                                                 count[f], len(updates.get(f, ())), f))
         pivot(e, chosen)
     reduced = {e: work[e] for e in rows if e not in pivots}
     return LinearElimination(pivots=pivots, rows=reduced, updates=updates)
 
 
 def _ratio(a: Coefficient, b: Coefficient) -> Coefficient:
+    """``a / b`` for a numeric `b`."""
     if type(a) is int and type(b) is int:
         q, r = divmod(a, b)
         return q if r == 0 else Fraction(a, b)
+    if isinstance(a, Laurent):
+        return a / b
     return _norm(Fraction(a) / b)
 
 
