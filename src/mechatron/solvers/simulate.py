@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time as _time
 
+import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
@@ -16,7 +17,7 @@ from mechatron.solvers.fixed import METHODS, integrate_fixed
 from mechatron.solvers.hybrid import terminal_event
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
-from mechatron.solvers.logging import evaluate_outputs
+from mechatron.solvers.logging import OutputColumns, evaluate_outputs
 from mechatron.solvers.native import integrate_native, native_library
 from mechatron.solvers.stiffness import probe
 from mechatron.solvers.variable import PLUGINS, consistent_algebraics, integrate_variable
@@ -30,8 +31,9 @@ DEFAULT_POINTS = 1001
 def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = None,
              params: dict | None = None, inputs=None, rtol: float = 1e-6,
              atol: float = 1e-8, t_out=None, t0: float = 0.0, iterations: int = 3,
-             max_step: float | None = None, newton: str = "check") -> SimResult:
-    """Simulate a model and log every variable.
+             max_step: float | None = None, newton: str = "check", log="states",
+             linear_solver: str = "auto") -> SimResult:
+    """Simulate a model; its simlog has every variable.
 
     Parameters
     ----------
@@ -73,10 +75,27 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         Largest step of the variable-step solvers (for models with events, by default a
         fiftieth of the simulated time, or half the shortest time scale a component
         declares).
+    log : {"states", "all"} or list of str
+        What a variable-step run stores: ``"states"`` (default) the trajectory (states,
+        algebraic unknowns); a list of instance paths (variables, or components for every
+        variable beneath them): those too; ``"all"``: every variable. Every variable of
+        the simlog can be read in each case: one not stored is computed from the stored
+        trajectory by the compiled output function when first read (the same values), so
+        memory grows with states x time points. Fixed-step and ``"rodas4"`` runs store
+        every variable.
+    linear_solver : {"auto", "sparse", "dense"}
+        Linear solver of the Newton iterations of CVODES and IDAS (see
+        :data:`mechatron.solvers.variable.LINEAR_SOLVERS`): ``"auto"`` sparse QR,
+        ``"sparse"`` sparse LU, ``"dense"`` dense LU. The Jacobian's sparsity comes from
+        the compiled model.
     """
     if solver not in SOLVERS:
         raise SimulationError(f"unknown solver '{solver}'. Choose one of "
                               f"{', '.join(SOLVERS)}.")
+    if not (isinstance(log, str) and log in ("states", "all")) and (
+            isinstance(log, str) or not all(isinstance(n, str) for n in log)):
+        raise SimulationError(f"simulate: log must be 'states', 'all' or a list of "
+                              f"instance paths, got {log!r}.")
     compile_time = None
     if isinstance(model, Component):
         t_c = _time.perf_counter()
@@ -89,6 +108,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     if not np.isfinite(t_stop) or t_stop <= t0:
         raise SimulationError(f"model '{cm.name}': t_stop must be a number > t0 = {t0:g}, "
                               f"got {t_stop!r}.")
+    asked = _asked_rows(cm, log)
     p = cm.parameter_vector(params)
     ext = resolve_inputs(cm, inputs, params, t0, t_stop)   # external inputs, or None
     if ext is not None:
@@ -105,6 +125,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         compile_time = (compile_time or 0.0) + (_time.perf_counter() - t_c)
     clock = _time.perf_counter()
     X0, z0, init_report = initialize(cm, p if ext is None else ext.columns(p, t0)[:, 0], t0)
+    lazy = False
     if solver in METHODS:
         t, Y, Xf, unconverged = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p,
                                                 method=solver, iterations=iterations,
@@ -128,6 +149,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                             rejected_steps=st["n_reject"], rhs_evals=st["n_rhs"],
                             jac_evals=st["n_jac"], solver_reason="asked for")
     else:
+        lazy = log != "all"
         grid = _grid(cm, t0, t_stop, t_out)
         h_max = _max_step(cm, p, grid, max_step)
         plugin, reason = solver, "asked for"
@@ -135,14 +157,19 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
             p_t0 = p if ext is None else ext.columns(p, t0)[:, 0]
             plugin, reason = choose_auto(cm, t0, t_stop, X0, z0, p_t0, h_max)
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
-                                            atol=atol, max_step=h_max, inputs=ext)
+                                            atol=atol, max_step=h_max, inputs=ext,
+                                            linear_solver=linear_solver)
         p_log = p if ext is None else ext.logged_columns(p, grid)
         if cm.nz and Z.size:
             Z = consistent_algebraics(cm, grid, X, Z, p_log, used)
-        Y = evaluate_outputs(cm, grid, X, Z, p_log)
         t, Xf = grid, X[:, -1]
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
-            t, Y = t[1:], Y[:, 1:]
+            t, X, Z = t[1:], X[:, 1:], Z[:, 1:]
+            p_log = p_log[:, 1:] if np.ndim(p_log) == 2 else p_log
+        if lazy:
+            source = OutputColumns(cm.f_out, t, X, Z, p_log, cache=cm._cache)
+        else:
+            Y = evaluate_outputs(cm, t, X, Z, p_log)
         stats = SolverStats(solver=used,
                             steps=int(st.get("n_steps", st.get("nsteps", 0))),
                             rejected_steps=int(st.get("n_reject", st.get("netfails", 0))),
@@ -151,18 +178,97 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                             solver_reason=reason)
     _check_chattering(cm, Xf, stats.solver)
     if cm.report.get("terminal_relations"):     # when(terminal()) acts at the last point
-        Xf, Y[:, -1] = terminal_event(cm, float(t[-1]), Xf, z0, p)
+        if lazy:    # the outputs at the last point follow from the state after it
+            Xf, _ = terminal_event(cm, float(t[-1]), Xf, z0, p)
+            X[:, -1] = Xf
+        else:
+            Xf, Y[:, -1] = terminal_event(cm, float(t[-1]), Xf, z0, p)
         _check_chattering(cm, Xf, stats.solver)
     stats.events = _events(cm, Xf)
+    if lazy and not (np.all(np.isfinite(X[:, -1])) and np.all(np.isfinite(source.last()))):
+        lazy, Y = False, source(np.arange(len(cm.names)))
     stats.wall_time = _time.perf_counter() - clock
     stats.compile_time = compile_time
-    if not np.all(np.isfinite(Y[:, -1])):
-        _not_finite(cm, t, Y, Xf, p if ext is None else None)
-    res = SimResult(t, Y, cm.names, cm.units, stats=stats, model_name=cm.name,
-                    descriptions={n: d for n, d in zip(cm.names, cm.docs) if d})
+    names, units, index, descriptions = _log_names(cm)
+    if lazy:
+        rows, states = _state_rows(cm)
+        values = X[:cm.nx] if states == list(range(cm.nx)) else X[states]
+        res = SimResult._of_model(t, values, names, units, index, descriptions,
+                                  stats=stats, model_name=cm.name, stored=rows,
+                                  source=source)
+        res._keep(asked)
+    else:
+        if not np.all(np.isfinite(Y[:, -1])):
+            _not_finite(cm, t, Y, Xf, p if ext is None else None)
+        res = SimResult._of_model(t, Y, names, units, index, descriptions, stats=stats,
+                                  model_name=cm.name)
     res.initialization = init_report
     res.event_times = _event_times(cm, Xf)
     return res
+
+
+def _asked_rows(cm: CompiledModel, log) -> list[int]:
+    """Rows of ``cm.names`` that ``log`` (a list of paths or component prefixes) asks for."""
+    if isinstance(log, str):
+        return []
+    index = cm._cache.get("name_index")
+    if index is None:
+        index = cm._cache["name_index"] = {n: i for i, n in enumerate(cm.names)}
+    rows: list[int] = []
+    for path in log:
+        row = index.get(path)
+        if row is not None:
+            rows.append(row)
+            continue
+        start = path.rstrip(".") + "."
+        beneath = [i for i, n in enumerate(cm.names) if n.startswith(start)]
+        if not beneath:
+            import difflib
+            close = difflib.get_close_matches(path, cm.names, 3)
+            raise SimulationError(
+                f"model '{cm.name}': log: '{path}' is neither a variable nor a component "
+                "with variables." + (f" Did you mean {', '.join(close)}?" if close else
+                                     " CompiledModel.names lists them all."),
+                path=path, variables=close)
+        rows += beneath
+    return rows
+
+
+def _log_names(cm: CompiledModel):
+    """Names, units, name index and descriptions of the simlog, built once per model and
+    shared by its results (a result never changes them)."""
+    cached = cm._cache.get("log_names")
+    if cached is None:
+        names = [str(n) for n in cm.names]
+        if len(set(names)) != len(names):    # a compiled model's names are unique
+            raise SimulationError(f"model '{cm.name}': repeated logged variable names.")
+        cached = cm._cache["log_names"] = (
+            names, [str(u) for u in cm.units], {n: i for i, n in enumerate(names)},
+            {n: str(d) for n, d in zip(names, cm.docs) if d})
+    return cached
+
+
+def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int]]:
+    """The logged variables that are states: their rows in ``cm.names`` and their indices
+    in ``X``, for each state the output function returns unchanged (its row of ``y`` is
+    the symbol ``X[i]`` itself), so a selective log stores the trajectory's rows as they
+    are (no copy) and they equal what a full log holds bit for bit."""
+    cached = cm._cache.get("state_rows")
+    if cached is None:
+        rows, states = [], []
+        if cm.f_out.is_a("SXFunction"):
+            index = _log_names(cm)[2]
+            pairs = [(index[n], i) for i, n in enumerate(cm.state_names) if n in index]
+            if pairs:
+                sym, y = OutputColumns.expression(cm.f_out, cm._cache)
+                r, i = (list(v) for v in zip(*pairs))
+                # SX folds the difference of a node with itself to the constant 0, which
+                # sparsify drops: the entries left are rows that are not the state
+                differ = set(ca.sparsify(y[r] - sym[1][i]).sparsity().row())
+                rows = [a for k, a in enumerate(r) if k not in differ]
+                states = [b for k, b in enumerate(i) if k not in differ]
+        cached = cm._cache["state_rows"] = (rows, states)
+    return cached
 
 
 def choose_auto(cm: CompiledModel, t0: float, t_stop: float, X0: np.ndarray,
