@@ -18,7 +18,7 @@ from mechatron.solvers.hybrid import terminal_event
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
 from mechatron.solvers.logging import OutputColumns, evaluate_outputs
-from mechatron.solvers.native import integrate_native, native_library
+from mechatron.solvers.native import auto_library, integrate_native, native_library
 from mechatron.solvers.stiffness import probe
 from mechatron.solvers.variable import PLUGINS, consistent_algebraics, integrate_variable
 
@@ -123,9 +123,25 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         t_c = _time.perf_counter()
         native_library(cm)
         compile_time = (compile_time or 0.0) + (_time.perf_counter() - t_c)
+    use_native = False
+    if solver == "auto" and (ext is None or not ext.drive) and "native_auto" not in cm._cache:
+        t_c = _time.perf_counter()
+        if auto_library(cm) is not None:     # built now, or found in the disk cache
+            compile_time = (compile_time or 0.0) + (_time.perf_counter() - t_c)
+    if solver == "auto" and (ext is None or not ext.drive):
+        use_native = auto_library(cm) is not None
     clock = _time.perf_counter()
     X0, z0, init_report = initialize(cm, p if ext is None else ext.columns(p, t0)[:, 0], t0)
     lazy = False
+    native = None
+    if solver == "rodas4" or use_native:
+        try:
+            native = _run_native(cm, t0, t_stop, t_out, X0, p, rtol, atol, max_step)
+        except SimulationError:
+            if not use_native:
+                raise
+            # auto: the compiled run failed (a value not finite, a step too small): the
+            # variable-step path below diagnoses or integrates it
     if solver in METHODS:
         t, Y, Xf, unconverged = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p,
                                                 method=solver, iterations=iterations,
@@ -138,16 +154,11 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
                             rhs_evals=n * _stages(solver), jac_evals=0,
                             solver_reason="asked for", unconverged_steps=unconverged)
-    elif solver == "rodas4":
-        grid = _grid(cm, t0, t_stop, t_out)
-        Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
-                                     max_step=_max_step(cm, p, grid, max_step))
-        t = grid
-        if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
-            t, Y = t[1:], Y[:, 1:]
-        stats = SolverStats(solver="rodas4", steps=st["n_steps"],
-                            rejected_steps=st["n_reject"], rhs_evals=st["n_rhs"],
-                            jac_evals=st["n_jac"], solver_reason="asked for")
+    elif native is not None:
+        t, Y, Xf, stats = native
+        if use_native:
+            stats.solver_reason = (f"no events, an ODE of {cm.nx} state(s): the model and "
+                                   "a Rosenbrock method compiled to C (rodas4)")
     else:
         lazy = log != "all"
         grid = _grid(cm, t0, t_stop, t_out)
@@ -205,6 +216,21 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     res.initialization = init_report
     res.event_times = _event_times(cm, Xf)
     return res
+
+
+def _run_native(cm: CompiledModel, t0: float, t_stop: float, t_out, X0: np.ndarray,
+                p: np.ndarray, rtol: float, atol: float, max_step: float | None):
+    """The compiled Rodas4 run: ``(t, Y, Xf, stats)``."""
+    grid = _grid(cm, t0, t_stop, t_out)
+    Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
+                                 max_step=_max_step(cm, p, grid, max_step))
+    t = grid
+    if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
+        t, Y = t[1:], Y[:, 1:]
+    stats = SolverStats(solver="rodas4", steps=st["n_steps"], rejected_steps=st["n_reject"],
+                        rhs_evals=st["n_rhs"], jac_evals=st["n_jac"],
+                        solver_reason="asked for")
+    return t, Y, Xf, stats
 
 
 def _asked_rows(cm: CompiledModel, log) -> list[int]:
