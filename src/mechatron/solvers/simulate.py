@@ -276,23 +276,35 @@ def _log_names(cm: CompiledModel):
 
 def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int]]:
     """The logged variables that are states: their rows in ``cm.names`` and their indices
-    in ``X``, for each state the output function returns unchanged (its row of ``y`` is
-    the symbol ``X[i]`` itself), so a selective log stores the trajectory's rows as they
-    are (no copy) and they equal what a full log holds bit for bit."""
+    in ``X``, for each state the output function returns unchanged, so a selective log
+    stores the trajectory's rows as they are (no copy) and they equal what a full log
+    holds bit for bit.
+
+    Found by probing rather than by building the output's expression graph (which costs
+    memory on large models): at three points where every input (time, states, algebraic
+    unknowns, parameters) is drawn at random, of both signs, a row that returns the
+    state's value bit for bit each time is the state itself (a row that depended on any
+    other input, or transformed it, would match by coincidence only)."""
     cached = cm._cache.get("state_rows")
     if cached is None:
-        rows, states = [], []
-        if cm.f_out.is_a("SXFunction"):
-            index = _log_names(cm)[2]
-            pairs = [(index[n], i) for i, n in enumerate(cm.state_names) if n in index]
-            if pairs:
-                sym, y = OutputColumns.expression(cm.f_out, cm._cache)
-                r, i = (list(v) for v in zip(*pairs))
-                # SX folds the difference of a node with itself to the constant 0, which
-                # sparsify drops: the entries left are rows that are not the state
-                differ = set(ca.sparsify(y[r] - sym[1][i]).sparsity().row())
-                rows = [a for k, a in enumerate(r) if k not in differ]
-                states = [b for k, b in enumerate(i) if k not in differ]
+        index = _log_names(cm)[2]
+        pairs = [(index[n], i) for i, n in enumerate(cm.state_names) if n in index]
+        keep = np.ones(len(pairs), dtype=bool)
+        if pairs:
+            r = np.array([a for a, _ in pairs])
+            i = np.array([b for _, b in pairs])
+            rng = np.random.default_rng(20260517)
+            for _ in range(3):
+                X = rng.uniform(-2.0, 2.0, cm.nX)
+                z = rng.uniform(-2.0, 2.0, cm.nz)
+                p = cm.p0 * rng.uniform(0.5, 1.5, cm.p0.size) + rng.uniform(-1, 1,
+                                                                         cm.p0.size)
+                with np.errstate(all="ignore"):
+                    y = np.array(cm.f_out(rng.uniform(0.1, 2.0), X, z, p),
+                                 dtype=float).ravel()
+                keep &= y[r] == X[i]
+        rows = [a for k, (a, _) in enumerate(pairs) if keep[k]]
+        states = [b for k, (_, b) in enumerate(pairs) if keep[k]]
         cached = cm._cache["state_rows"] = (rows, states)
     return cached
 
