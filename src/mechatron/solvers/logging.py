@@ -19,7 +19,7 @@ import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
 
-__all__ = ["evaluate_outputs", "OutputColumns", "SMALL_LOG"]
+__all__ = ["evaluate_outputs", "evaluate_point", "OutputColumns", "SMALL_LOG"]
 
 CHUNK = 64            # output points per mapped evaluation, for large models
 CHUNK_VALUES = 16384  # small models map more points at once: about this many values
@@ -69,6 +69,19 @@ def _evaluate(f: ca.Function, n_y: int, t: np.ndarray, X: np.ndarray, Z: np.ndar
         buf.set_res(0, memoryview(out[k * n_y:(k + m) * n_y]))
         evaluate()
     return out.reshape(n, n_y).T
+
+
+def evaluate_point(f: ca.Function, args) -> np.ndarray:
+    """``f(*args)``'s first output as a flat array, through the buffer interface (no
+    casadi.DM: converting one of many entries costs memory and time)."""
+    arrays = [np.ascontiguousarray(np.ravel(a), dtype=float) for a in args]
+    out = np.empty(f.nnz_out(0))
+    buf, evaluate = f.buffer()
+    for k, a in enumerate(arrays):
+        buf.set_arg(k, memoryview(a))
+    buf.set_res(0, memoryview(out))
+    evaluate()
+    return out
 
 
 def evaluate_outputs(cm: CompiledModel, t: np.ndarray, X: np.ndarray, Z: np.ndarray,
@@ -151,8 +164,7 @@ class OutputColumns:
         """Every variable at the last output time (one evaluation)."""
         k = self.t.size - 1
         p = self.p[:, k] if np.ndim(self.p) == 2 else self.p
-        return np.array(self.f_out(self.t[k], self.X[:, k], self.Z[:, k], p),
-                        dtype=float).ravel()
+        return evaluate_point(self.f_out, [self.t[k], self.X[:, k], self.Z[:, k], p])
 
     def _all_rows(self, rows: np.ndarray, n_all: int) -> np.ndarray:
         """Rows of the whole output, computed over chunks of points so that the whole

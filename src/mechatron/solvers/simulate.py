@@ -17,7 +17,7 @@ from mechatron.solvers.fixed import METHODS, integrate_fixed
 from mechatron.solvers.hybrid import terminal_event
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
-from mechatron.solvers.logging import OutputColumns, evaluate_outputs
+from mechatron.solvers.logging import OutputColumns, evaluate_outputs, evaluate_point
 from mechatron.solvers.native import auto_library, integrate_native, native_library
 from mechatron.solvers.stiffness import probe
 from mechatron.solvers.variable import PLUGINS, consistent_algebraics, integrate_variable
@@ -161,6 +161,8 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                                    "a Rosenbrock method compiled to C (rodas4)")
     else:
         lazy = log != "all"
+        if lazy:
+            _state_rows(cm)    # probed once per model, before the integrator takes memory
         grid = _grid(cm, t0, t_stop, t_out)
         h_max = _max_step(cm, p, grid, max_step)
         plugin, reason = solver, "asked for"
@@ -300,8 +302,7 @@ def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int]]:
                 p = cm.p0 * rng.uniform(0.5, 1.5, cm.p0.size) + rng.uniform(-1, 1,
                                                                          cm.p0.size)
                 with np.errstate(all="ignore"):
-                    y = np.array(cm.f_out(rng.uniform(0.1, 2.0), X, z, p),
-                                 dtype=float).ravel()
+                    y = evaluate_point(cm.f_out, [rng.uniform(0.1, 2.0), X, z, p])
                 keep &= y[r] == X[i]
         rows = [a for k, (a, _) in enumerate(pairs) if keep[k]]
         states = [b for k, (_, b) in enumerate(pairs) if keep[k]]
