@@ -151,6 +151,15 @@ def run(quick: bool = False, tiny: bool = False) -> dict:
     _, t_prof, where = profiled(sim)
     alternative = logging_alternative(cm, res, t_out)
 
+    def default_sim():
+        return mt.simulate(cm, T_STOP, rtol=RTOL, atol=ATOL, t_out=t_out)
+
+    d_res, d_first = clock(default_sim)     # a library of this structure built or loaded
+    d_res, d_times = repeat(default_sim, max(n_rep, 25) if not tiny else n_rep)
+    default = {"first_call_s": d_first, "simulate": summary(d_times),
+               "solver": d_res.stats.solver, "solver_reason": d_res.stats.solver_reason}
+    log(f"dc_motor mechatron default ({d_res.stats.solver}): median "
+        f"{default['simulate']['median_s'] * 1e6:.0f} us")
     rodas = _rodas4_runs(cm, t_out, n_rep, fresh_build=not tiny)
     r_res = rodas.pop("result")
     scipy_res = _scipy_runs(P, t_out, n_rep)
@@ -172,6 +181,8 @@ def run(quick: bool = False, tiny: bool = False) -> dict:
                 ratio(r["time"]["median_s"], (integ or {}).get("median_s")),
             "ratio_scipy_over_mechatron_rodas4":
                 ratio(r["time"]["median_s"], rodas["simulate"]["median_s"]),
+            "ratio_scipy_over_mechatron_default":
+                ratio(r["time"]["median_s"], default["simulate"]["median_s"]),
             "counts": {"nfev": r["nfev"], "njev": r["njev"], "nlu": r["nlu"]},
             **agreement(r["final_w"], r["final_i"]),
         }
@@ -198,6 +209,7 @@ def run(quick: bool = False, tiny: bool = False) -> dict:
             **agreement(w_end, i_end),
         },
         "mechatron_rodas4": rodas,
+        "mechatron_default": default,
         "scipy": baselines,
         "notes": ["ratio = SciPy median time / Mechatron median simulate time (first call "
                   "excluded); > 1 means Mechatron is faster. ratio_..._rodas4: the same "

@@ -23,6 +23,7 @@ import _common  # noqa: F401  (import path)
 from _common import dumps, environment, log
 
 import bench_codegen
+import bench_dask
 import bench_dc_motor
 import bench_dimensions
 import bench_emps
@@ -31,6 +32,7 @@ import bench_events
 import bench_explore
 import bench_fmu_import
 import bench_import
+import bench_ladder_simulate
 import bench_multibody
 import bench_pwm
 import bench_realtime
@@ -46,7 +48,8 @@ BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
               "dimensions": bench_dimensions.run, "subsystems": bench_subsystems.run,
               "events": bench_events.run,
               "stiff_contact": bench_stiff_contact.run,
-              "explore": bench_explore.run, "fmu_import": bench_fmu_import.run}
+              "explore": bench_explore.run, "fmu_import": bench_fmu_import.run,
+              "ladder_simulate": bench_ladder_simulate.run, "dask": bench_dask.run}
 
 #: Goals of issue 17 for the RC ladder: compile seconds by N, and simulation at least
 #: twice as fast as the SciPy peer (ratio peer / Mechatron >= 2) at these N.
@@ -162,7 +165,14 @@ def _rows_dc_motor(r: dict) -> list[dict]:
     mech = r["mechatron"]["simulate"]["median_s"]
     rodas = r["mechatron_rodas4"]
     lsoda = r["scipy"]["scipy_LSODA"]
-    rows = [_row("DC motor 0.5 s, simulate (cvodes)", "s", mech, "SciPy LSODA",
+    rows = []
+    if "mechatron_default" in r:
+        d = r["mechatron_default"]
+        ratio_d = lsoda["ratio_scipy_over_mechatron_default"]
+        rows.append(_row(f"DC motor 0.5 s, simulate (default: {d['solver']})", "s",
+                         d["simulate"]["median_s"], "SciPy LSODA", lsoda["time"]["median_s"],
+                         ratio_d, "ratio >= 10 (issue 17)", (ratio_d or 0) >= 10))
+    rows += [_row("DC motor 0.5 s, simulate (cvodes)", "s", mech, "SciPy LSODA",
                  lsoda["time"]["median_s"], lsoda["ratio_scipy_over_mechatron"],
                  "ratio >= 10 (issue 17)", lsoda["ratio_scipy_over_mechatron"] >= 10),
             _row("DC motor 0.5 s, simulate (rodas4)", "s", rodas["simulate"]["median_s"],
@@ -193,6 +203,36 @@ def _rows_scaling(r: dict) -> list[dict]:
                          else None,
                          (ratio or 0) >= LADDER_SIMULATE_GOAL_RATIO if wants else None))
     return rows
+
+
+def _rows_ladder_simulate(r: dict) -> list[dict]:
+    rows = []
+    for row in r["rows"]:
+        m, base = row["mechatron"], row["scipy_LSODA_banded"]
+        if "error" in m or "error" in base:
+            continue
+        n = row["N"]
+        rows.append(_row(f"RC ladder N={n} simulate (default, warm)", "s", m["median_s"],
+                         "SciPy LSODA, banded Jacobian", base["median_s"],
+                         row["ratio_lsoda_over_mechatron"],
+                         f"ratio >= {r['goals']['ratio_lsoda_over_mechatron']:g} (issue 17)",
+                         row["goal_ratio_met"]))
+        rows.append(_row(f"RC ladder N={n} simulate, first call", "s", m["first_s"]))
+        rows.append(_row(f"RC ladder N={n} simulate, peak memory", "MB", m["peak_rss_mb"],
+                         "SciPy LSODA process", base["peak_rss_mb"],
+                         base["peak_rss_mb"] / m["peak_rss_mb"],
+                         f"< {r['goals']['peak_rss_mb_N10000']:g} MB (issue 17)"
+                         if n == 10000 else None,
+                         row["goal_memory_met"] if n == 10000 else None))
+    return rows
+
+
+def _rows_dask(r: dict) -> list[dict]:
+    return [_row("Dask sweep, 2 workers vs 1 (LocalCluster)", "s", r["workers_2_s"],
+                 "1 worker", r["workers_1_s"], r["speedup_1_to_2_workers"]),
+            _row("Dask sweep, 2 workers vs this process", "s", r["workers_2_s"],
+                 "local loop", r["local_s"], r["ratio_local_over_2_workers"]),
+            _row("Dask per-task overhead", "s", r["per_task_overhead_s"])]
 
 
 def _rows_pwm(r: dict) -> list[dict]:
@@ -333,7 +373,8 @@ TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_p
               "dimensions": _rows_dimensions,
               "subsystems": _rows_subsystems, "events": _rows_events,
               "stiff_contact": _rows_stiff_contact, "explore": _rows_explore,
-              "fmu_import": _rows_fmu_import}
+              "fmu_import": _rows_fmu_import,
+              "ladder_simulate": _rows_ladder_simulate, "dask": _rows_dask}
 
 
 def table(results: dict) -> list[dict]:

@@ -36,6 +36,6 @@ def test_a_compiled_model_and_a_result_show_sizes_profile_values_and_a_plot():
     assert "2 states, 0 algebraic" in html and "inertia.w" in html and ">flatten<" in html
     res = mt.simulate(cm, 0.05)
     html = res._repr_html_()
-    assert f"{len(res.names)} variables" in html and ">cvodes<" in html
+    assert f"{len(res.names)} variables" in html and f">{res.stats.solver}<" in html
     assert f"{res.final('source.v'):.6g}" in html
     assert html.count("data:image/png;base64,") == 1

@@ -53,6 +53,10 @@ SUFFIXES = (".csv", ".parquet")
 _METADATA_KEY = b"mechatron"
 _FORMAT_VERSION = 1
 _N_SUGGESTIONS = 5
+#: A log computed on demand is computed whole, once, on the first read of a variable it
+#: did not store when it has at most this many values (8 MB); a larger one computes the
+#: variables read (and keeps them).
+_SMALL_LOG = 1 << 20
 
 
 @dataclass
@@ -160,6 +164,13 @@ class SimResult:
         Name of the simulated model, used in messages and plot titles.
     descriptions : mapping of str to str, optional
         One-line description of some or all variables, by instance path.
+    stored : sequence of int, optional
+        Selective logging: the rows of `names` that `values` holds, in its order (then
+        `values` has shape (len(stored), n_t)). The other variables are computed by
+        `source` when first read.
+    source : callable, optional
+        With `stored`: ``source(rows) -> array (len(rows), n_t)`` computes variables by
+        their rows in `names` (see :class:`mechatron.solvers.logging.OutputColumns`).
 
     Attributes
     ----------
@@ -184,11 +195,13 @@ class SimResult:
     """
 
     __slots__ = ("_t", "_values", "_names", "_units", "_descriptions", "_index",
+                 "_pos", "_source", "_computed",
                  "stats", "model_name", "initialization", "event_times")
 
     def __init__(self, t: Any, values: Any, names: Sequence[str], units: Sequence[str],
                  *, stats: SolverStats | None = None, model_name: str = "",
-                 descriptions: Mapping[str, str] | None = None):
+                 descriptions: Mapping[str, str] | None = None,
+                 stored: Sequence[int] | None = None, source: Any = None):
         self.model_name = str(model_name)
         self.initialization: list[dict] = []   # start-value targets and whether they held
         self.event_times: dict[str, float] = {}  # component -> time of its last event
@@ -200,12 +213,17 @@ class SimResult:
         if t.ndim != 1 or t.size == 0:
             raise DataError(f"{where}: the time axis must be a non-empty 1-D array, "
                             f"got shape {t.shape}.")
-        if values.size == 0 and not names:
+        n_rows = len(names) if stored is None else len(stored)
+        if values.size == 0 and not n_rows:
             values = values.reshape(0, t.size)
-        if values.ndim != 2 or values.shape != (len(names), t.size):
+        if values.ndim != 2 or values.shape != (n_rows, t.size):
             raise DataError(f"{where}: values must have shape (n_vars, n_t) = "
-                            f"({len(names)}, {t.size}), got {values.shape}. "
-                            f"One row per variable, one column per time point.")
+                            f"({n_rows}, {t.size}), got {values.shape}. "
+                            f"One row per {'variable' if stored is None else 'stored row'}, "
+                            "one column per time point.")
+        if stored is not None and source is None:
+            raise DataError(f"{where}: {len(names) - len(stored)} variable(s) not stored "
+                            "and no source to compute them. Pass source=, or all values.")
         if len(units) != len(names):
             raise DataError(f"{where}: {len(names)} names but {len(units)} units.")
         if not np.all(np.isfinite(t)):
@@ -237,6 +255,9 @@ class SimResult:
         self._units = units
         self._descriptions = {n: str(d) for n, d in descriptions.items()}
         self._index = index
+        self._source = source if stored is not None else None
+        self._pos = None if stored is None else {int(r): k for k, r in enumerate(stored)}
+        self._computed: dict[int, np.ndarray] = {}
         self.stats = stats
 
     # ----------------------------------------------------------------------- reading
@@ -247,8 +268,34 @@ class SimResult:
 
     @property
     def values(self) -> np.ndarray:
-        """numpy.ndarray: All values, shape (n_vars, n_t), rows in the order of `names`."""
-        return self._values
+        """numpy.ndarray: All values, shape (n_vars, n_t), rows in the order of `names`.
+
+        For a selectively logged run this computes every variable (memory: variables x
+        time points); read variables by name to compute only those."""
+        if self._pos is None:
+            return self._values
+        # the source computes the stored rows too, to the same bits (they are the states
+        # it computes from, or the same function): one pass over every variable
+        out = self._compute(list(range(len(self._names))))
+        out.flags.writeable = False
+        return out
+
+    @property
+    def logged(self) -> list[str]:
+        """list of str: The variables the run stored; every other one of `names` is
+        computed from them (and the states) when first read. All of `names` for a
+        fully logged run."""
+        if self._pos is None:
+            return list(self._names)
+        return [self._names[r] for r in sorted(self._pos)]
+
+    @property
+    def nbytes(self) -> int:
+        """int: Bytes held by the log (stored and computed values, and the trajectory
+        an on-demand log computes from)."""
+        extra = getattr(self._source, "nbytes", 0) if self._source is not None else 0
+        return int(self._values.nbytes + sum(a.nbytes for a in self._computed.values())
+                   + self._t.nbytes + extra)
 
     @property
     def names(self) -> list[str]:
@@ -280,7 +327,7 @@ class SimResult:
         row = self._index.get(name)
         if row is None:
             raise self._unknown(name)
-        return self._values[row]
+        return self._row(row)
 
     def __contains__(self, name: object) -> bool:
         return isinstance(name, str) and name in self._index
@@ -370,7 +417,7 @@ class SimResult:
         rows = self._resolve(names_or_prefixes, "select")
         stats = None if self.stats is None else SolverStats.from_dict(self.stats.as_dict())
         names = [self._names[r] for r in rows]
-        return SimResult(self._t, self._values[rows], names, [self._units[r] for r in rows],
+        return SimResult(self._t, self._rows(rows), names, [self._units[r] for r in rows],
                          stats=stats, model_name=self.model_name,
                          descriptions={n: self._descriptions[n] for n in names
                                        if n in self._descriptions})
@@ -387,7 +434,7 @@ class SimResult:
         """
         import pandas as pd
 
-        df = pd.DataFrame(self._values.T, index=pd.Index(self._t, name="t"),
+        df = pd.DataFrame(self.values.T, index=pd.Index(self._t, name="t"),
                           columns=pd.Index(self._names, dtype=object), copy=True)
         df.attrs["units"] = self.units
         df.attrs["model_name"] = self.model_name
@@ -452,7 +499,7 @@ class SimResult:
     def _save_csv(self, path: Path) -> None:
         table = np.empty((self._t.size, len(self._names) + 1))
         table[:, 0] = self._t
-        table[:, 1:] = self._values.T
+        table[:, 1:] = self.values.T
         with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
             csv.writer(fh, lineterminator="\n").writerow(["t", *self._names])
             np.savetxt(fh, table, fmt="%.17g", delimiter=",")
@@ -486,12 +533,13 @@ class SimResult:
 
         fields = [pa.field("t", pa.float64(), metadata={"unit": "s"})]
         columns = [pa.array(self._t)]
+        values = self.values
         for row, name in enumerate(self._names):
             meta = {"unit": self._units[row]}
             if name in self._descriptions:
                 meta["description"] = self._descriptions[name]
             fields.append(pa.field(name, pa.float64(), metadata=meta))
-            columns.append(pa.array(np.ascontiguousarray(self._values[row])))
+            columns.append(pa.array(np.ascontiguousarray(values[row])))
         info = {"format": _FORMAT_VERSION, "model_name": self.model_name,
                 "stats": None if self.stats is None else self.stats.as_dict()}
         schema = pa.schema(fields, metadata={_METADATA_KEY: json.dumps(info)})
@@ -588,8 +636,8 @@ class SimResult:
             fig = axes[0].figure
 
         for axis, (unit, group) in zip(axes, groups.items()):
-            for r in group:
-                axis.plot(self._t, self._values[r], label=self._names[r])
+            for r, y in zip(group, self._rows(group)):
+                axis.plot(self._t, y, label=self._names[r])
             axis.set_ylabel(_unit_label(unit))
             axis.grid(True, alpha=0.3)
             axis.legend(loc="best", fontsize="small")
@@ -613,7 +661,92 @@ class SimResult:
 
         return animate(self, path, **options)
 
+    @classmethod
+    def _of_model(cls, t: np.ndarray, values: np.ndarray, names: list[str],
+                  units: list[str], index: dict[str, int], descriptions: dict[str, str],
+                  *, stats: SolverStats | None, model_name: str,
+                  stored: Sequence[int] | None = None, source: Any = None) -> SimResult:
+        """A log from a compiled model's run, without the checks of the constructor:
+        the names, units and index come from the compiled model (unique, checked when it
+        was compiled) and are shared, not copied, between its results."""
+        self = cls.__new__(cls)
+        self.model_name = str(model_name)
+        self.initialization = []
+        self.event_times = {}
+        self._t = np.asarray(t, dtype=float).view()
+        self._t.flags.writeable = False
+        self._values = values.view()
+        self._values.flags.writeable = False
+        self._names, self._units, self._index = names, units, index
+        self._descriptions = descriptions
+        self._source = source if stored is not None else None
+        self._pos = None if stored is None else {int(r): k for k, r in enumerate(stored)}
+        self._computed = {}
+        self.stats = stats
+        return self
+
     # ------------------------------------------------------------------------ helpers
+    def _row(self, r: int) -> np.ndarray:
+        """Values of row ``r`` of `names` (read-only), computed and kept if not stored."""
+        if self._pos is None:
+            return self._values[r]
+        k = self._pos.get(r)
+        if k is not None:
+            return self._values[k]
+        y = self._computed.get(r)
+        if y is None:
+            n = len(self._names)
+            if n * self._t.size <= _SMALL_LOG:      # small: compute the rest at once
+                missing = [j for j in range(n) if j not in self._pos
+                           and j not in self._computed]
+            else:
+                missing = [r]
+            for j, row in zip(missing, self._compute(missing)):
+                row.flags.writeable = False
+                self._computed[j] = row
+            y = self._computed[r]
+        return y
+
+    def _rows(self, rows: Iterable[int]) -> np.ndarray:
+        """Values of several rows of `names`, shape (len(rows), n_t), a new array (the
+        rows not stored or kept are computed together, not kept)."""
+        rows = list(rows)
+        if self._pos is None:
+            return self._values[rows]
+        out = np.empty((len(rows), self._t.size))
+        missing = []
+        for k, r in enumerate(rows):
+            j = self._pos.get(r)
+            if j is not None:
+                out[k] = self._values[j]
+            elif r in self._computed:
+                out[k] = self._computed[r]
+            else:
+                missing.append(k)
+        if missing:
+            out[missing] = self._compute([rows[k] for k in missing])
+        return out
+
+    def _keep(self, rows: list[int]) -> None:
+        """Compute the rows not stored (one call) and keep them: the variables a
+        selectively logged run was asked to log."""
+        if self._pos is None:
+            return
+        rows = [r for r in dict.fromkeys(rows) if r not in self._pos
+                and r not in self._computed]
+        if rows:
+            for r, y in zip(rows, self._compute(rows)):
+                y.flags.writeable = False
+                self._computed[r] = y
+
+    def _compute(self, rows: list[int]) -> np.ndarray:
+        values = np.asarray(self._source(rows), dtype=float)
+        if values.shape != (len(rows), self._t.size):
+            raise DataError(f"{self._where()}: the source of the log's computed variables "
+                            f"returned shape {values.shape} for {len(rows)} row(s) of "
+                            f"{self._t.size} points.")
+        return values
+
     def _where(self) -> str:
         return f"simlog of {self.model_name!r}" if self.model_name else "simlog"
 

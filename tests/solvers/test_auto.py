@@ -104,10 +104,30 @@ class Smooth(mt.Component):
         return [mt.der(self.x) == -self.x]
 
 
-def test_without_events_auto_runs_bdf():
+def test_without_events_auto_runs_bdf(monkeypatch):
+    monkeypatch.setenv("MECHATRON_NATIVE", "0")      # the compiled path turned off
     res = mt.simulate(Smooth(), 1.0)
     assert res.stats.solver == "cvodes"
     assert "no events" in res.stats.solver_reason
+
+
+def test_a_small_ode_without_events_runs_compiled_by_default():
+    from mechatron.solvers.native import compiler
+    if compiler() is None:
+        pytest.skip("no C compiler")
+    cm = mt.compile_model(Smooth())
+    res = mt.simulate(cm, 1.0)
+    assert res.stats.solver == "rodas4"
+    assert "compiled to C" in res.stats.solver_reason
+    t = res.t
+    assert np.max(np.abs(res["x"] - np.exp(-t))) < 1e-6
+    # a second compile of the same structure finds the same library (cached by the
+    # hash of its source, in which parameters are arguments)
+    cm2 = mt.compile_model(Smooth(x=0.5))
+    again = mt.simulate(cm2, 1.0)
+    assert again.stats.solver == "rodas4"
+    assert cm2._cache["native_rodas4"].path == cm._cache["native_rodas4"].path
+    assert np.max(np.abs(again["x"] - 0.5 * np.exp(-t))) < 1e-6
 
 
 def test_a_solver_asked_for_says_so():

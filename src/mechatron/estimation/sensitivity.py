@@ -34,7 +34,6 @@ import logging
 import math
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -297,20 +296,6 @@ class SensitivityResult:
 
 
 # ------------------------------------------------------------------------------ evaluation
-_WORKER = {}
-
-
-def _init_worker(problem) -> None:
-    _WORKER["problem"] = problem
-
-
-def _evaluate_chunk(args):
-    """Requirement values for a block of samples (runs in a worker or in-process)."""
-    thetas, problem = args
-    prob = problem if problem is not None else _WORKER["problem"]
-    return _evaluate(prob, thetas)
-
-
 def requirement_names(problem) -> list:
     labels = []
     for b in problem.bound:
@@ -352,58 +337,39 @@ def _theta_rows(problem, names, X) -> np.ndarray:
 
 
 def evaluate(problem, names, X, *, workers: int | None = None, address: str | None = None,
-             progress=None) -> np.ndarray:
-    """Requirement values at the rows of ``X`` (parameters ``names``), in parallel."""
+             client=None, progress=None) -> np.ndarray:
+    """Requirement values at the rows of ``X`` (parameters ``names``), in parallel: on
+    local processes, or on a Dask cluster (``client``, or the scheduler at ``address``),
+    through :func:`mechatron.batch.map_blocks` (the problem sent once per worker, blocks
+    retried, results in order: the same values as a local run)."""
+    from mechatron.batch import map_blocks
     T = _theta_rows(problem, names, X)
     n = len(T)
     workers = workers if workers is not None else (os.cpu_count() or 1)
+    if client is None and not address and n < 8:
+        workers = 1
     chunks = max(1, min(n, 4 * max(workers, 1)))
     blocks = np.array_split(np.arange(n), chunks)
+    sizes = np.cumsum([len(b) for b in blocks])
+    tick = (lambda k, _total: progress(int(sizes[k - 1]), n)) if progress else None
+    results = map_blocks(_evaluate, problem, [T[b] for b in blocks], workers=workers,
+                         client=client, address=address, progress=tick)
     out = np.full((n, len(requirement_names(problem))), np.nan)
-    done = 0
-    if address:
-        try:
-            from dask.distributed import Client    # optional dependency
-        except ImportError as exc:
-            raise ParameterError(f"sensitivity: evaluating on the Dask cluster at "
-                                 f"{address} needs dask.distributed, which cannot be "
-                                 f"imported ({exc}); install it (pip install "
-                                 "\"dask[distributed]\") or give no address to use local "
-                                 "processes.") from None
-        with Client(address) as client:
-            remote = client.scatter(problem, broadcast=True)
-            futures = [client.submit(_evaluate, remote, T[blk]) for blk in blocks]
-            for blk, fut in zip(blocks, futures):
-                out[blk] = fut.result()
-                done += len(blk)
-                if progress:
-                    progress(done, n)
-        return out
-    if workers <= 1 or n < 8:
-        for blk in blocks:
-            out[blk] = _evaluate(problem, T[blk])
-            done += len(blk)
-            if progress:
-                progress(done, n)
-        return out
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
-                             initargs=(problem,)) as pool:
-        for blk, res in zip(blocks, pool.map(_evaluate_chunk, [(T[b], None) for b in blocks])):
-            out[blk] = res
-            done += len(blk)
-            if progress:
-                progress(done, n)
+    for blk, res in zip(blocks, results):
+        out[blk] = res
     return out
 
 
 def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol",
                     seed: int = 0, workers: int | None = None, address: str | None = None,
-                    best: int = 5, progress=None, native: bool = True) -> SensitivityResult:
+                    best: int = 5, progress=None, native: bool = True,
+                    client=None) -> SensitivityResult:
     """Sample ``dists`` (parameter name of ``problem`` -> :class:`Distribution`), evaluate
     the requirements, and compute the statistics (see the module docstring).
 
     ``native`` compiles the step functions to C first when a compiler is present (see
-    :mod:`.native`; the results are the same)."""
+    :mod:`.native`; the results are the same). ``client`` (a ``distributed.Client``) or
+    ``address`` runs the samples on a Dask cluster (see :func:`evaluate`)."""
     names = list(dists)
     # the statistics regress on the independent samples (A and B for Sobol): they need
     # more of them than parameters plus one
@@ -431,7 +397,8 @@ def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol"
         X = np.vstack([A, Bm, AB.reshape(-1, d)])
     else:
         X = sample(dists, n, method, seed)
-    Y = evaluate(problem, names, X, workers=workers, address=address, progress=progress)
+    Y = evaluate(problem, names, X, workers=workers, address=address, client=client,
+                 progress=progress)
     used_workers = 0 if address else (workers if workers is not None else os.cpu_count())
     ok = np.all(np.isfinite(Y), axis=1)
     failed = int(np.sum(~ok))

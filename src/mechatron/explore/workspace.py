@@ -394,7 +394,7 @@ class Workspace:
 
     def _trim(self) -> None:
         def size() -> int:
-            return sum(r.result.values.nbytes for r in self._runs.values())
+            return sum(r.result.nbytes for r in self._runs.values())   # no values computed
         while len(self._runs) > MAX_RUNS or (len(self._runs) > 1 and size() > MAX_BYTES):
             del self._runs[next(iter(self._runs))]
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time as _time
 
+import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
@@ -16,8 +17,8 @@ from mechatron.solvers.fixed import METHODS, integrate_fixed
 from mechatron.solvers.hybrid import terminal_event
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
-from mechatron.solvers.logging import evaluate_outputs
-from mechatron.solvers.native import integrate_native, native_library
+from mechatron.solvers.logging import OutputColumns, evaluate_outputs, evaluate_point
+from mechatron.solvers.native import auto_library, integrate_native, native_library
 from mechatron.solvers.stiffness import probe
 from mechatron.solvers.variable import PLUGINS, consistent_algebraics, integrate_variable
 
@@ -30,8 +31,9 @@ DEFAULT_POINTS = 1001
 def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = None,
              params: dict | None = None, inputs=None, rtol: float = 1e-6,
              atol: float = 1e-8, t_out=None, t0: float = 0.0, iterations: int = 3,
-             max_step: float | None = None, newton: str = "check") -> SimResult:
-    """Simulate a model and log every variable.
+             max_step: float | None = None, newton: str = "check", log="states",
+             linear_solver: str = "auto") -> SimResult:
+    """Simulate a model; its simlog has every variable.
 
     Parameters
     ----------
@@ -73,10 +75,27 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         Largest step of the variable-step solvers (for models with events, by default a
         fiftieth of the simulated time, or half the shortest time scale a component
         declares).
+    log : {"states", "all"} or list of str
+        What a variable-step run stores: ``"states"`` (default) the trajectory (states,
+        algebraic unknowns); a list of instance paths (variables, or components for every
+        variable beneath them): those too; ``"all"``: every variable. Every variable of
+        the simlog can be read in each case: one not stored is computed from the stored
+        trajectory by the compiled output function when first read (the same values), so
+        memory grows with states x time points. Fixed-step and ``"rodas4"`` runs store
+        every variable.
+    linear_solver : {"auto", "sparse", "dense"}
+        Linear solver of the Newton iterations of CVODES and IDAS (see
+        :data:`mechatron.solvers.variable.LINEAR_SOLVERS`): ``"auto"`` sparse QR,
+        ``"sparse"`` sparse LU, ``"dense"`` dense LU. The Jacobian's sparsity comes from
+        the compiled model.
     """
     if solver not in SOLVERS:
         raise SimulationError(f"unknown solver '{solver}'. Choose one of "
                               f"{', '.join(SOLVERS)}.")
+    if not (isinstance(log, str) and log in ("states", "all")) and (
+            isinstance(log, str) or not all(isinstance(n, str) for n in log)):
+        raise SimulationError(f"simulate: log must be 'states', 'all' or a list of "
+                              f"instance paths, got {log!r}.")
     compile_time = None
     if isinstance(model, Component):
         t_c = _time.perf_counter()
@@ -94,6 +113,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     if not np.isfinite(t_stop) or t_stop <= t0:
         raise SimulationError(f"model '{cm.name}': t_stop must be a number > t0 = {t0:g}, "
                               f"got {t_stop!r}.")
+    asked = _asked_rows(cm, log)
     p = cm.parameter_vector(params)
     ext = resolve_inputs(cm, inputs, params, t0, t_stop)   # external inputs, or None
     if ext is not None:
@@ -108,8 +128,25 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         t_c = _time.perf_counter()
         native_library(cm)
         compile_time = (compile_time or 0.0) + (_time.perf_counter() - t_c)
+    use_native = False
+    if solver == "auto" and (ext is None or not ext.drive) and "native_auto" not in cm._cache:
+        t_c = _time.perf_counter()
+        if auto_library(cm) is not None:     # built now, or found in the disk cache
+            compile_time = (compile_time or 0.0) + (_time.perf_counter() - t_c)
+    if solver == "auto" and (ext is None or not ext.drive):
+        use_native = auto_library(cm) is not None
     clock = _time.perf_counter()
     X0, z0, init_report = initialize(cm, p if ext is None else ext.columns(p, t0)[:, 0], t0)
+    lazy = False
+    native = None
+    if solver == "rodas4" or use_native:
+        try:
+            native = _run_native(cm, t0, t_stop, t_out, X0, p, rtol, atol, max_step)
+        except SimulationError:
+            if not use_native:
+                raise
+            # auto: the compiled run failed (a value not finite, a step too small): the
+            # variable-step path below diagnoses or integrates it
     if solver in METHODS:
         t, Y, Xf, unconverged = integrate_fixed(cm, t0, t_stop, dt, X0, z0, p,
                                                 method=solver, iterations=iterations,
@@ -122,17 +159,15 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         stats = SolverStats(solver=solver, steps=n, rejected_steps=0,
                             rhs_evals=n * _stages(solver), jac_evals=0,
                             solver_reason="asked for", unconverged_steps=unconverged)
-    elif solver == "rodas4":
-        grid = _grid(cm, t0, t_stop, t_out)
-        Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
-                                     max_step=_max_step(cm, p, grid, max_step))
-        t = grid
-        if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
-            t, Y = t[1:], Y[:, 1:]
-        stats = SolverStats(solver="rodas4", steps=st["n_steps"],
-                            rejected_steps=st["n_reject"], rhs_evals=st["n_rhs"],
-                            jac_evals=st["n_jac"], solver_reason="asked for")
+    elif native is not None:
+        t, Y, Xf, stats = native
+        if use_native:
+            stats.solver_reason = (f"no events, an ODE of {cm.nx} state(s): the model and "
+                                   "a Rosenbrock method compiled to C (rodas4)")
     else:
+        lazy = log != "all"
+        if lazy:
+            _state_rows(cm)    # probed once per model, before the integrator takes memory
         grid = _grid(cm, t0, t_stop, t_out)
         h_max = _max_step(cm, p, grid, max_step)
         plugin, reason = solver, "asked for"
@@ -140,14 +175,19 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
             p_t0 = p if ext is None else ext.columns(p, t0)[:, 0]
             plugin, reason = choose_auto(cm, t0, t_stop, X0, z0, p_t0, h_max)
         X, Z, st, used = integrate_variable(cm, grid, X0, z0, p, solver=plugin, rtol=rtol,
-                                            atol=atol, max_step=h_max, inputs=ext)
+                                            atol=atol, max_step=h_max, inputs=ext,
+                                            linear_solver=linear_solver)
         p_log = p if ext is None else ext.logged_columns(p, grid)
         if cm.nz and Z.size:
             Z = consistent_algebraics(cm, grid, X, Z, p_log, used)
-        Y = evaluate_outputs(cm, grid, X, Z, p_log)
         t, Xf = grid, X[:, -1]
         if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
-            t, Y = t[1:], Y[:, 1:]
+            t, X, Z = t[1:], X[:, 1:], Z[:, 1:]
+            p_log = p_log[:, 1:] if np.ndim(p_log) == 2 else p_log
+        if lazy:
+            source = OutputColumns(cm.f_out, t, X, Z, p_log, cache=cm._cache)
+        else:
+            Y = evaluate_outputs(cm, t, X, Z, p_log)
         stats = SolverStats(solver=used,
                             steps=int(st.get("n_steps", st.get("nsteps", 0))),
                             rejected_steps=int(st.get("n_reject", st.get("netfails", 0))),
@@ -156,18 +196,123 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                             solver_reason=reason)
     _check_chattering(cm, Xf, stats.solver)
     if cm.report.get("terminal_relations"):     # when(terminal()) acts at the last point
-        Xf, Y[:, -1] = terminal_event(cm, float(t[-1]), Xf, z0, p)
+        if lazy:    # the outputs at the last point follow from the state after it
+            Xf, _ = terminal_event(cm, float(t[-1]), Xf, z0, p)
+            X[:, -1] = Xf
+        else:
+            Xf, Y[:, -1] = terminal_event(cm, float(t[-1]), Xf, z0, p)
         _check_chattering(cm, Xf, stats.solver)
     stats.events = _events(cm, Xf)
+    if lazy and not (np.all(np.isfinite(X[:, -1])) and np.all(np.isfinite(source.last()))):
+        lazy, Y = False, source(np.arange(len(cm.names)))
     stats.wall_time = _time.perf_counter() - clock
     stats.compile_time = compile_time
-    if not np.all(np.isfinite(Y[:, -1])):
-        _not_finite(cm, t, Y, Xf, p if ext is None else None)
-    res = SimResult(t, Y, cm.names, cm.units, stats=stats, model_name=cm.name,
-                    descriptions={n: d for n, d in zip(cm.names, cm.docs) if d})
+    names, units, index, descriptions = _log_names(cm)
+    if lazy:
+        rows, states = _state_rows(cm)
+        values = X[:cm.nx] if states == list(range(cm.nx)) else X[states]
+        res = SimResult._of_model(t, values, names, units, index, descriptions,
+                                  stats=stats, model_name=cm.name, stored=rows,
+                                  source=source)
+        res._keep(asked)
+    else:
+        if not np.all(np.isfinite(Y[:, -1])):
+            _not_finite(cm, t, Y, Xf, p if ext is None else None)
+        res = SimResult._of_model(t, Y, names, units, index, descriptions, stats=stats,
+                                  model_name=cm.name)
     res.initialization = init_report
     res.event_times = _event_times(cm, Xf)
     return res
+
+
+def _run_native(cm: CompiledModel, t0: float, t_stop: float, t_out, X0: np.ndarray,
+                p: np.ndarray, rtol: float, atol: float, max_step: float | None):
+    """The compiled Rodas4 run: ``(t, Y, Xf, stats)``."""
+    grid = _grid(cm, t0, t_stop, t_out)
+    Y, Xf, st = integrate_native(cm, grid, X0, p, rtol=rtol, atol=atol,
+                                 max_step=_max_step(cm, p, grid, max_step))
+    t = grid
+    if t_out is not None and np.asarray(t_out, dtype=float)[0] != t0:
+        t, Y = t[1:], Y[:, 1:]
+    stats = SolverStats(solver="rodas4", steps=st["n_steps"], rejected_steps=st["n_reject"],
+                        rhs_evals=st["n_rhs"], jac_evals=st["n_jac"],
+                        solver_reason="asked for")
+    return t, Y, Xf, stats
+
+
+def _asked_rows(cm: CompiledModel, log) -> list[int]:
+    """Rows of ``cm.names`` that ``log`` (a list of paths or component prefixes) asks for."""
+    if isinstance(log, str):
+        return []
+    index = cm._cache.get("name_index")
+    if index is None:
+        index = cm._cache["name_index"] = {n: i for i, n in enumerate(cm.names)}
+    rows: list[int] = []
+    for path in log:
+        row = index.get(path)
+        if row is not None:
+            rows.append(row)
+            continue
+        start = path.rstrip(".") + "."
+        beneath = [i for i, n in enumerate(cm.names) if n.startswith(start)]
+        if not beneath:
+            import difflib
+            close = difflib.get_close_matches(path, cm.names, 3)
+            raise SimulationError(
+                f"model '{cm.name}': log: '{path}' is neither a variable nor a component "
+                "with variables." + (f" Did you mean {', '.join(close)}?" if close else
+                                     " CompiledModel.names lists them all."),
+                path=path, variables=close)
+        rows += beneath
+    return rows
+
+
+def _log_names(cm: CompiledModel):
+    """Names, units, name index and descriptions of the simlog, built once per model and
+    shared by its results (a result never changes them)."""
+    cached = cm._cache.get("log_names")
+    if cached is None:
+        names = [str(n) for n in cm.names]
+        if len(set(names)) != len(names):    # a compiled model's names are unique
+            raise SimulationError(f"model '{cm.name}': repeated logged variable names.")
+        cached = cm._cache["log_names"] = (
+            names, [str(u) for u in cm.units], {n: i for i, n in enumerate(names)},
+            {n: str(d) for n, d in zip(names, cm.docs) if d})
+    return cached
+
+
+def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int]]:
+    """The logged variables that are states: their rows in ``cm.names`` and their indices
+    in ``X``, for each state the output function returns unchanged, so a selective log
+    stores the trajectory's rows as they are (no copy) and they equal what a full log
+    holds bit for bit.
+
+    Found by probing rather than by building the output's expression graph (which costs
+    memory on large models): at three points where every input (time, states, algebraic
+    unknowns, parameters) is drawn at random, of both signs, a row that returns the
+    state's value bit for bit each time is the state itself (a row that depended on any
+    other input, or transformed it, would match by coincidence only)."""
+    cached = cm._cache.get("state_rows")
+    if cached is None:
+        index = _log_names(cm)[2]
+        pairs = [(index[n], i) for i, n in enumerate(cm.state_names) if n in index]
+        keep = np.ones(len(pairs), dtype=bool)
+        if pairs:
+            r = np.array([a for a, _ in pairs])
+            i = np.array([b for _, b in pairs])
+            rng = np.random.default_rng(20260517)
+            for _ in range(3):
+                X = rng.uniform(-2.0, 2.0, cm.nX)
+                z = rng.uniform(-2.0, 2.0, cm.nz)
+                p = cm.p0 * rng.uniform(0.5, 1.5, cm.p0.size) + rng.uniform(-1, 1,
+                                                                         cm.p0.size)
+                with np.errstate(all="ignore"):
+                    y = evaluate_point(cm.f_out, [rng.uniform(0.1, 2.0), X, z, p])
+                keep &= y[r] == X[i]
+        rows = [a for k, (a, _) in enumerate(pairs) if keep[k]]
+        states = [b for k, (_, b) in enumerate(pairs) if keep[k]]
+        cached = cm._cache["state_rows"] = (rows, states)
+    return cached
 
 
 def choose_auto(cm: CompiledModel, t0: float, t_stop: float, X0: np.ndarray,

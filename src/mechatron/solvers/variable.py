@@ -20,7 +20,8 @@ from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
 from mechatron.solvers.inputs import driven_parameters
 
-__all__ = ["integrate_variable", "consistent_algebraics", "held_states"]
+__all__ = ["integrate_variable", "consistent_algebraics", "held_states", "LINEAR_SOLVERS",
+           "linear_solver_for"]
 
 #: Newton iterations that polish the algebraic unknowns at the output times
 Z_ITERATIONS = 3
@@ -45,6 +46,17 @@ def _quiet_stderr():
             os.dup2(saved, fd)
             os.close(saved)
 
+#: Linear solvers of the Newton iterations of CVODES and IDAS, by the name ``simulate``
+#: takes, with the CasADi plug-in each uses. The Jacobian's sparsity comes from the
+#: compiled model's expression graph (CasADi's automatic differentiation keeps it), and a
+#: sparse solver factorizes only its nonzeros: on an RC ladder the iteration matrix is
+#: tridiagonal, so a step costs O(N) rather than the O(N^3) of a dense factorization.
+LINEAR_SOLVERS = {
+    "auto": "qr",           # sparse QR (CasADi's own), for any size
+    "sparse": "csparse",    # sparse LU with partial pivoting (CSparse)
+    "dense": "lapacklu",    # dense LU (LAPACK): every entry, for comparison and tiny models
+}
+
 PLUGINS = {"cvodes": "cvodes", "bdf": "cvodes", "idas": "idas", "rosenbrock": "rosenbrock",
            "rk45": "erk"}
 
@@ -61,6 +73,16 @@ def choose_plugin(cm: CompiledModel, solver: str) -> str:
     plugin = PLUGINS[solver]
     if cm.nz and plugin in ("cvodes", "erk"):
         return "idas" if plugin == "cvodes" else "rosenbrock"
+    return plugin
+
+
+def linear_solver_for(cm: CompiledModel, choice: str) -> str:
+    """The CasADi linear solver plug-in for ``simulate(linear_solver=choice)``."""
+    plugin = LINEAR_SOLVERS.get(choice)
+    if plugin is None:
+        raise SimulationError(f"model '{cm.name}': unknown linear_solver {choice!r}. Choose "
+                              f"one of {', '.join(map(repr, LINEAR_SOLVERS))}.",
+                              path=cm.name)
     return plugin
 
 
@@ -107,11 +129,12 @@ def _model(cm: CompiledModel) -> ca.Function:
 
 
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
-                atol: float, max_step: float | None, drive: tuple = ()) -> ca.Function:
+                atol: float, max_step: float | None, drive: tuple = (),
+                linear_solver: str = "auto") -> ca.Function:
     # drive: (p slot, table length) of each external input given as a table; the tables
     # are data of the integrator's parameter vector (see mechatron.solvers.inputs)
     key = ("var", plugin, grid.size, float(grid[0]), float(grid[-1]), hash(grid.tobytes()),
-           rtol, atol, max_step, drive)
+           rtol, atol, max_step, drive, linear_solver)
     cached = cm._cache.get(key)
     if cached is not None:
         return cached
@@ -143,6 +166,7 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
         opts["print_stats"] = False
+        opts["linear_solver"] = linear_solver_for(cm, linear_solver)
     if max_step:
         opts["max_step_size"] = max_step
     if cm.nr:
@@ -163,11 +187,13 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
 
 def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: np.ndarray,
                        p: np.ndarray, *, solver: str, rtol: float, atol: float,
-                       max_step: float | None = None, inputs=None):
+                       max_step: float | None = None, inputs=None,
+                       linear_solver: str = "auto"):
     """Integrate on ``grid``; return ``(X, Z, stats)`` with one column per grid point.
 
     ``inputs`` (:class:`mechatron.solvers.inputs.Inputs`, optional) drives the model's
-    external inputs."""
+    external inputs; ``linear_solver`` is one of :data:`LINEAR_SOLVERS` (see
+    :func:`linear_solver_for`)."""
     plugin = choose_plugin(cm, solver)
     if cm.nr and plugin in ("cvodes", "idas"):
         owners = sorted({owner or cm.name for owner, _ in cm.relations})
@@ -181,16 +207,31 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     drive = inputs.drive if inputs is not None else ()
     if drive:
         p = inputs.integrator_parameters(p)
-    integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive)
+    integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive, linear_solver)
+    pad = 1 if cm.nX == 0 else 0
+    # CasADi's buffer interface: the integrator reads and writes NumPy memory directly
+    # (a casadi.DM of the trajectory costs more to convert than the integration itself
+    # on large models); the trajectory is column-major, one column per grid point
+    x0 = np.ascontiguousarray(np.concatenate([X0, np.zeros(pad)]), dtype=float)
+    zz0 = np.ascontiguousarray(z0, dtype=float)
+    pp = np.ascontiguousarray(p, dtype=float)
+    xs = np.empty((grid.size, cm.nX + pad))
+    zs = np.empty((grid.size, cm.nz))
+    buf, evaluate = integ.buffer()
+    buf.set_arg(0, memoryview(x0))
+    buf.set_arg(1, memoryview(zz0))
+    buf.set_arg(2, memoryview(pp))
+    buf.set_res(0, memoryview(xs.reshape(-1)))
+    buf.set_res(1, memoryview(zs.reshape(-1)))
     try:
-        sol = integ(x0=np.concatenate([X0, np.zeros(1 if cm.nX == 0 else 0)]), z0=z0, p=p)
+        evaluate()
     except RuntimeError as exc:
         cause = _nonfinite_cause(cm, float(grid[0]), X0, z0, p, drive)
         raise SimulationError(_explain(cm, str(exc)) + (f" At the start: {cause}." if cause
                                                         else ""), path=cm.name) from None
-    X = np.array(sol["xf"], dtype=float)[:cm.nX].reshape(cm.nX, grid.size)
-    Z = np.array(sol["zf"], dtype=float).reshape(cm.nz, grid.size)
-    stats = integ.stats()
+    X = xs.T[:cm.nX]      # (nX, n) views, no copies
+    Z = zs.T
+    stats = buf.stats()
     return X, Z, stats, plugin
 
 
