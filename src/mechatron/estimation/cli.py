@@ -21,16 +21,27 @@ __all__ = ["add_commands", "Progress"]
 
 
 class Progress:
-    """A progress bar on stderr (``total`` known) or a step counter (``total`` None)."""
+    """Progress on stderr: on a terminal a tqdm bar (``total`` known) or counter, shown
+    once the run lasts over :data:`mechatron.cli.PROGRESS_DELAY` s; otherwise one line
+    per tenth of the run (or per step when ``total`` is None)."""
 
     def __init__(self, label: str, total: int | None = None, *, enabled: bool = True):
         self.label, self.total, self.enabled = label, total, enabled
         self.tty = sys.stderr.isatty()
         self.start = time.perf_counter()
         self._last = 0.0
+        self.bar = None
+        if enabled and self.tty:
+            from mechatron.cli import progress
+            self.bar = progress(total=total, desc=label)
 
     def update(self, done: int, text: str = "") -> None:
         if not self.enabled:
+            return
+        if self.bar is not None:
+            if text:
+                self.bar.set_postfix_str(text, refresh=False)
+            self.bar.update(done - self.bar.n)
             return
         now = time.perf_counter()
         final = self.total is not None and done >= self.total
@@ -50,8 +61,8 @@ class Progress:
             print(line, file=sys.stderr, flush=True)
 
     def close(self) -> None:
-        if self.enabled and self.tty:
-            print(file=sys.stderr, flush=True)
+        if self.bar is not None:
+            self.bar.close()
 
 
 def _out_dir(path: str | None) -> Path | None:
@@ -202,7 +213,10 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     emit(f"  ranking by {head} (then Spearman correlation), most important first:")
     emit(table(["parameter"] + res.requirements + [f"rho {r}" for r in res.requirements],
                rows, right="".join(str(k) for k in range(1, 2 * len(res.requirements) + 1))))
-    if res.warnings:
+    if res.warnings and res.ST is None:
+        emit(f"  ! {n} samples are too few for the regression coefficients (see the "
+             f"warning): use more, e.g. --samples {max(4 * n, 10 * (len(res.names) + 1))}.")
+    elif res.warnings:
         emit(f"  ! {len(res.warnings)} Sobol index/indices outside [0, 1] (sampling "
              f"error; see the warnings): use more samples than {n}, e.g. --samples {4 * n}.")
     emit("  best samples (starting values for `mechatron estimate`):")

@@ -93,6 +93,12 @@ def compiled(model) -> CompiledModel:
     return model if isinstance(model, CompiledModel) else mt.compile_model(model)
 
 
+
+#: The most Radau substeps per sample an estimation problem takes (the step functions
+#: unroll them).
+MAX_SUBSTEPS = 1000
+
+
 class EstimationProblem:
     """Model, experiments, what is free, and how the data bind to the model.
 
@@ -131,6 +137,12 @@ class EstimationProblem:
                                   or m < 1):
                 raise ParameterError(f"estimation: substeps must be a whole number >= 1 "
                                      f"(or None to choose them), got {substeps!r}.")
+            if m is not None and m > MAX_SUBSTEPS:
+                raise ParameterError(f"estimation: substeps = {m} per sample is more than "
+                                     f"the {MAX_SUBSTEPS} the step functions are built for "
+                                     "(the generated code grows with them: 1e5 gave 80 MB "
+                                     "of C); resample the data or give fewer substeps, or "
+                                     "none to choose them.")
         self.cm = compiled(model)
         check_model(self.cm, "estimation")
         cm = self.cm

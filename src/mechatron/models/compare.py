@@ -85,9 +85,10 @@ def compare_variants(entry: ModelEntry, *, params: dict | None = None,
                      t_stop: float | None = None, solver: str | None = None,
                      dt: float | None = None, rtol: float | None = None,
                      atol: float | None = None, points: int = COMPARE_POINTS,
-                     variants: list[str] | None = None) -> Comparison:
+                     variants: list[str] | None = None, progress=None) -> Comparison:
     """Simulate every variant of ``entry`` (default: its experiment's settings) on a common
-    grid of ``points`` output times and measure each output's deviation from the first."""
+    grid of ``points`` output times and measure each output's deviation from the first.
+    ``progress(done, total)`` is called after each variant's run."""
     exp = entry.experiment
     params = params or {}
     t_stop = exp.t_stop if t_stop is None else t_stop
@@ -100,6 +101,8 @@ def compare_variants(entry: ModelEntry, *, params: dict | None = None,
                               dt=dt if dt is not None else exp.dt,
                               rtol=exp.rtol if rtol is None else rtol,
                               atol=exp.atol if atol is None else atol, t_out=grid)
+        if progress is not None:
+            progress(len(results), len(variants))
     cmp = Comparison(entry, results)
     ref = variants[0]
     ref_paths = entry.output_paths(ref)
