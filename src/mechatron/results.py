@@ -299,6 +299,11 @@ class SimResult:
         from mechatron._html import result_html
         return result_html(self)
 
+    def _repr_svg_(self) -> str | None:
+        """Notebook display: a plot of the first variables that change, with units."""
+        from mechatron._html import result_svg
+        return result_svg(self)
+
     def final(self, name: str) -> float:
         """Return the value of a variable at the last time point.
 
