@@ -156,6 +156,33 @@ def _need_dask(where: str) -> None:
                            "(--workers N).")
 
 
+def _reach_scheduler(where: str, address: str, timeout: float = 5.0) -> None:
+    """A :class:`CommandError` at once when no scheduler listens at a TCP ``address``
+    (``tcp://host:port`` or ``host:port``), instead of Dask's 30 s connection timeout."""
+    import socket
+    from urllib.parse import urlsplit
+    text = address if "://" in address else f"tcp://{address}"
+    parts = urlsplit(text)
+    if parts.scheme not in ("tcp", "tls"):
+        return                                  # other transports: Dask checks them
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or port is None:
+        raise CommandError(f"{where} {address}: expected the scheduler's address as "
+                           "tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786.")
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise CommandError(f"{where} {address}: no Dask scheduler answers there "
+                           f"({reason}). Start one (`dask scheduler`, then `dask worker "
+                           f"{address}`) or drop "
+                           f"{'--dask' if where == '--dask' else 'the address'} to run on "
+                           "local processes (--workers N).") from None
+
+
 def _save(out: Path | None, doc: dict, plots, name: str) -> list[Path]:
     """Write the plots (callables taking a path, by file name) and ``doc`` as
     ``name.json`` into ``out``; record the files in ``doc``. Nothing without ``out``."""
@@ -183,7 +210,9 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     workers = args.workers if args.workers is not None else opts.get("workers")
     address = args.dask or opts.get("address")
     if address:
-        _need_dask(args.dask and "--dask" or "[sensitivity] address")
+        where = args.dask and "--dask" or "[sensitivity] address"
+        _need_dask(where)
+        _reach_scheduler(where, str(address))
     total = n * (len(dists) + 2) if method == "sobol" else n
     bar = Progress("sensitivity", total, enabled=not args.quiet)
     res = run_sensitivity(prob, dists, n=n, method=method, seed=int(opts.get("seed", 0)),

@@ -149,6 +149,12 @@ class EstimationProblem:
         self.experiments = list(experiments)
         if not self.experiments:
             raise DataError("no experiment given; an estimation needs measured data.")
+        if all(e.outputs and all(not np.any(np.asarray(v, dtype=float))
+                                 for v in e.outputs.values()) for e in self.experiments):
+            names = ", ".join(f"'{e.name}' ({e.source})" for e in self.experiments)
+            raise DataError(f"estimation: every measured output of {names} is zero: such "
+                            "data hold no information about the parameters. Is a sensor "
+                            "not connected, or are the wrong columns read?")
         self.free = [_as_free(f) for f in free]
         self.inputs = dict(inputs or {})
         self.outputs = dict(outputs or {})
