@@ -83,3 +83,27 @@ def test_free_parameters_and_design_variables_check_their_bounds():
         with pytest.raises(ParameterError, match="'R': min must be a number, got nan"):
             cls("R", 1.0, math.nan)
         assert cls("R", 7.0, 0.0).max == math.inf
+
+
+def test_optimizer_flags_the_active_constraint(tmp_path, capsys):
+    """The speed PI of the example is limited by the armature current: the fastest step
+    the +-3 A bound allows. The result names that bound as active (the optimum sits on
+    it), and an independent simulation of the optimized gains peaks at 3 A; the step
+    envelope keeps slack and is not named."""
+    import json
+    import shutil
+    from pathlib import Path
+    from mechatron.cli import main
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    cfg = tmp_path / "pi.toml"
+    shutil.copy(examples / "dc_motor_speed_pi_optimize.toml", cfg)
+    code = main(["optimize", str(cfg), "--json", "--quiet"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["active"] == ["i bound"]
+    peak = next(r for r in doc["requirements"] if r["requirement"] == "max i")
+    assert peak["value"] == pytest.approx(3.0, rel=5e-3)
+    code = main(["optimize", str(cfg), "--quiet"])
+    out, _ = capsys.readouterr()
+    assert "active constraints (they decide the optimum): i bound" in out

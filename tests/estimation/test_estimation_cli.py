@@ -144,3 +144,31 @@ def test_dask_without_a_scheduler_is_a_prompt_error(capsys, example):
     assert "--workers N" in err
     code, out, err = run(capsys, "sensitivity", str(cfg), "--dask", "tcp://nohost", "-q")
     assert code == 2 and "expected the scheduler's address as tcp://HOST:PORT" in err
+
+
+def test_estimation_flags_unidentifiable_parameters(capsys, example, tmp_path):
+    """From the locked-rotor run alone (w = 0 throughout) the current obeys
+    L di/dt = V - R i: R and L are determined, the inertia J cannot be (the outputs do
+    not depend on it). J is flagged as not identifiable, R and L are not."""
+    cfg = example("dc_motor_estimate.toml")
+    text = cfg.read_text()
+    start = text.index("[[experiments]]")
+    second = text.index("[[experiments]]", start + 1)
+    text = text[:start] + text[second:]                   # drop the multi-step run
+    text = text.replace('w = "rate(phi)"', "")
+    params = text.index("[parameters]")
+    fixed = text.index("[fixed]")
+    text = (text[:params] + "[parameters]\nR = { initial = 10.0, min = 0 }\n"
+            "L = { initial = 2e-4, min = 0 }\nJ = { initial = 1.6e-6, min = 0 }\n\n"
+            + text[fixed:].replace("[fixed]", "[fixed]\nk = 0.151\nB = 1.2e-4\n"
+                                   "T_C = 8.5e-3"))
+    text = text.replace('offsets = ["i"]', "")
+    cfg.write_text(text)
+    code, out, err = run(capsys, "estimate", str(cfg), "--json", "--quiet",
+                         "--max-iterations", "20")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert set(doc["flags"]) == {"J"}, doc["flags"]
+    assert doc["flags"]["J"].startswith("is not identifiable")
+    assert "warning: estimate: J is not identifiable" in err
+    assert doc["parameters"]["R"] == pytest.approx(7.1, rel=0.05)   # table 6-1

@@ -108,7 +108,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         rows.append([name, f"{res.initial[j]:.6g}", f"{res.values[j]:.6g}",
                      f"[{lo:.6g}, {hi:.6g}]",
                      f"{100 * res.std[j] / abs(res.values[j]):.2f}%" if res.values[j] else "-",
-                     _bound_note(res.at_bound.get(name))])
+                     _bound_note(res.at_bound.get(name)) or _flag_note(res.flags.get(name))])
     emit(table(["parameter", "start", "estimate", "95% interval", "rel. std", "note"], rows,
                right="1234"))
     emit("  fit (NRMSE, 0 = perfect): " + "; ".join(
@@ -123,6 +123,13 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     for f in files:
         emit(f"  wrote {f}")
     return 0
+
+
+def _flag_note(why: str | None) -> str:
+    if not why:
+        return ""
+    return ("NOT IDENTIFIABLE" if "not identifiable" in why else
+            "ZERO" if "exactly 0" in why else "POORLY IDENTIFIABLE")
 
 
 def _bound_note(hit: dict | None) -> str:
@@ -284,6 +291,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     emit(table(["design variable", "start", "optimized", "note"],
                [[n, f"{a:.6g}", f"{b:.6g}", _bound_note(res.at_bound.get(n))] for n, a, b in
                 zip(res.names, res.initial, res.values)], right="12"))
+    if res.active:
+        emit(f"  active constraints (they decide the optimum): {', '.join(res.active)}")
     emit("  requirements, checked by an independent variable-step simulation:")
     emit(table(["requirement", "limit", "start", "optimized", "met"],
                [[r["requirement"], f"{r['limit']:.4g} {r['unit']}",

@@ -510,6 +510,10 @@ class EstimationResult:
     #: (see :func:`~mechatron.estimation.bounds.at_bounds`); their intervals assume an
     #: interior optimum and do not hold there.
     at_bound: dict = field(default_factory=dict)
+    #: Parameters the data cannot determine, ``{name: why}`` (see
+    #: :func:`identifiability`): zero, without influence on the outputs, or with a
+    #: standard deviation above the estimate.
+    flags: dict = field(default_factory=dict)
 
     @property
     def parameters(self) -> dict:
@@ -518,7 +522,7 @@ class EstimationResult:
     def to_dict(self) -> dict:
         return {"parameters": self.parameters,
                 "initial": dict(zip(self.names, map(float, self.initial))),
-                "at_bound": self.at_bound,
+                "at_bound": self.at_bound, "flags": self.flags,
                 "ci95": {k: [float(lo), float(hi)] for k, (lo, hi) in self.ci95.items()},
                 "std": dict(zip(self.names, map(float, self.std))),
                 "correlation": {"names": self.names,
@@ -729,10 +733,40 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     hits = at_bounds(prob.names, theta, lo_b, hi_b)
     if hits:
         log.warning("estimate: %s", describe_at_bounds(hits, "estimate"))
+    flags = identifiability(prob.names, theta, J, std)
+    for name, why in flags.items():
+        log.warning("estimate: %s %s", name, why)
     return EstimationResult(
         names=list(prob.names), initial=prob.initial, values=theta, std=std, ci95=ci,
         correlation=corr, cost_initial=cost0, cost=cost,
         nrmse=_nrmse(prob, prob.simulate(theta)),
         nrmse_initial=_nrmse(prob, prob.simulate(prob.initial)), history=history,
         iterations=len(history) - 1, evaluations=counts["sims"], wall_time=wall,
-        success=bool(success), message=message, problem=prob, at_bound=hits)
+        success=bool(success), message=message, problem=prob, at_bound=hits,
+        flags=flags)
+
+
+def identifiability(names, theta, J, std, *, rel_column: float = 1e-8,
+                    rel_std: float = 1.0) -> dict:
+    """Parameters the data cannot determine, ``{name: why}``: an estimate of exactly 0
+    (no relative uncertainty, and rarely what the physics means), a column of the
+    (scaled) Jacobian ``J`` below ``rel_column`` of the largest (the outputs do not
+    depend on it), or a standard deviation above ``rel_std`` times the estimate (the
+    95% interval spans zero twice over: the data barely inform it)."""
+    J = np.asarray(J, dtype=float)
+    norms = np.linalg.norm(J, axis=0) if J.size else np.zeros(len(names))
+    top = float(norms.max()) if norms.size else 0.0
+    out = {}
+    for j, name in enumerate(names):
+        if top == 0.0 or norms[j] <= rel_column * top:
+            out[name] = ("is not identifiable: the measured outputs do not depend on it "
+                         "(its Jacobian column is zero); fix it, or add an experiment "
+                         "that excites it.")
+        elif theta[j] == 0.0:
+            out[name] = ("is estimated as exactly 0: is it needed, or is 0 its bound? Its "
+                         "relative uncertainty is undefined.")
+        elif not np.isfinite(std[j]) or std[j] > rel_std * abs(theta[j]):
+            out[name] = (f"is poorly identifiable: standard deviation {std[j]:.3g} is more "
+                         f"than {rel_std:.0%} of the estimate {theta[j]:.3g}; the data "
+                         "barely inform it (see the correlations).")
+    return out
