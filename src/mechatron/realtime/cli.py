@@ -59,7 +59,9 @@ def cmd_rtcheck(args) -> int:
     solvers = [s.strip() for s in args.solvers.split(",")] if args.solvers else None
     with progress(args, desc="rtcheck", unit="run") as bar:
         def tell(done, total, what):
-            bar.total = total
+            if bar.total != total:
+                bar.total = total
+                bar.refresh()
             bar.set_postfix_str(what, refresh=False)
             bar.update(done - bar.n)
         r = rtcheck(model, rate=args.rate, t_stop=t_stop, outputs=outputs,
