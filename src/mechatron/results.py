@@ -85,9 +85,11 @@ class SolverStats:
         the stiffness probe's figures), or that it was asked for.
     unconverged_steps : int, optional
         Steps of an implicit fixed-step method whose Newton iteration had not converged
-        after the fixed iteration count (only counted with ``newton="fixed"``, the
+        after the fixed iteration count (only counted with ``newton="count"``, the
         real-time setting; otherwise such a step is an error).
 
+    Notes
+    -----
     The fields can also be read by name, ``stats["solver"]``.
     """
 
