@@ -19,14 +19,18 @@ Every subcommand takes ``--help``; ``--json`` prints one JSON object on stdout i
 the human summary. A model (``NAME``) is a database name, a user's file
 ``path/to/model.py[:ClassName]`` or ``package.module:ClassName`` (see
 :mod:`mechatron.models.user`). The library's log (the ``mechatron`` logger) goes to
-stderr: warnings always, what is done with ``-v``, details with ``-vv``.
+stderr: warnings always, what is done with ``-v``, details with ``-vv``. Runs over
+:data:`PROGRESS_DELAY` s show a progress bar (tqdm) on stderr when it is a terminal;
+``-q`` hides it.
 
 Exit codes and errors
 ---------------------
-0 on success; 2 for a usage error (argparse) or a problem with the user's input (any
-:class:`~mechatron.errors.MechatronError`, :class:`ValueError`, :class:`TypeError`, an
-:class:`OSError` such as a missing file or folder or a full disk), reported as one line ``error: <message>`` on stderr; 1 for an
-unexpected error (a bug), also one line, or for a demo whose checks failed. Set
+0 on success; 2 for a usage error (argparse's, also one line) or a problem with the
+user's input (any :class:`~mechatron.errors.MechatronError`, :class:`ValueError`,
+:class:`TypeError`, an :class:`OSError` such as a missing file or folder or a full disk),
+reported as one line ``error: <message>`` on stderr; 1 for an unexpected error (a bug),
+also one line, or for a demo whose checks failed. ``tests/test_cli_fuzz.py`` holds the
+commands to this on random arguments and problem files. Set
 ``MECHATRON_DEBUG=1`` to get the traceback as well.
 
 Later subcommands (``library``, ``codegen``, ``estimate``...) live beside the code they

@@ -107,3 +107,22 @@ def test_optimizer_flags_the_active_constraint(tmp_path, capsys):
     code = main(["optimize", str(cfg), "--quiet"])
     out, _ = capsys.readouterr()
     assert "active constraints (they decide the optimum): i bound" in out
+
+
+def test_identifiability_flags_by_rule():
+    """The three rules of estimation.problem.identifiability on a made-up Jacobian:
+    a zero column (the outputs do not depend on c), an estimate of exactly 0 (d; not
+    when it sits on its bound, reported there), a std above the estimate (b; only
+    for a converged fit)."""
+    from mechatron.estimation.problem import identifiability
+    J = np.array([[1.0, 0.5, 0.0, 2.0], [0.0, 1.0, 0.0, 1.0]])
+    theta = np.array([1.0, 0.1, 3.0, 0.0])
+    std = np.array([0.1, 0.2, np.inf, 0.01])
+    flags = identifiability(list("abcd"), theta, J, std)
+    assert set(flags) == {"b", "c", "d"}
+    assert flags["c"].startswith("is not identifiable")
+    assert flags["d"].startswith("is estimated as exactly 0")
+    assert flags["b"].startswith("is poorly identifiable: standard deviation 0.2 is more "
+                                 "than 100% of the estimate 0.1")
+    assert set(identifiability(list("abcd"), theta, J, std, converged=False,
+                               on_bound={"d": {}})) == {"c"}

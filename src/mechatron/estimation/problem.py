@@ -733,7 +733,8 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     hits = at_bounds(prob.names, theta, lo_b, hi_b)
     if hits:
         log.warning("estimate: %s", describe_at_bounds(hits, "estimate"))
-    flags = identifiability(prob.names, theta, J, std)
+    flags = identifiability(prob.names, theta, J, std, converged=bool(success),
+                            on_bound=hits)
     for name, why in flags.items():
         log.warning("estimate: %s %s", name, why)
     return EstimationResult(
@@ -747,12 +748,15 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
 
 
 def identifiability(names, theta, J, std, *, rel_column: float = 1e-8,
-                    rel_std: float = 1.0) -> dict:
+                    rel_std: float = 1.0, converged: bool = True,
+                    on_bound=()) -> dict:
     """Parameters the data cannot determine, ``{name: why}``: an estimate of exactly 0
     (no relative uncertainty, and rarely what the physics means), a column of the
     (scaled) Jacobian ``J`` below ``rel_column`` of the largest (the outputs do not
     depend on it), or a standard deviation above ``rel_std`` times the estimate (the
-    95% interval spans zero twice over: the data barely inform it)."""
+    95% interval spans zero twice over: the data barely inform it); the last only when
+    the fit ``converged`` (away from an optimum the covariance means nothing). A zero on
+    a bound (names in ``on_bound``) is reported as on its bound instead."""
     J = np.asarray(J, dtype=float)
     norms = np.linalg.norm(J, axis=0) if J.size else np.zeros(len(names))
     top = float(norms.max()) if norms.size else 0.0
@@ -762,10 +766,10 @@ def identifiability(names, theta, J, std, *, rel_column: float = 1e-8,
             out[name] = ("is not identifiable: the measured outputs do not depend on it "
                          "(its Jacobian column is zero); fix it, or add an experiment "
                          "that excites it.")
-        elif theta[j] == 0.0:
+        elif theta[j] == 0.0 and name not in on_bound:
             out[name] = ("is estimated as exactly 0: is it needed, or is 0 its bound? Its "
                          "relative uncertainty is undefined.")
-        elif not np.isfinite(std[j]) or std[j] > rel_std * abs(theta[j]):
+        elif converged and (not np.isfinite(std[j]) or std[j] > rel_std * abs(theta[j])):
             out[name] = (f"is poorly identifiable: standard deviation {std[j]:.3g} is more "
                          f"than {rel_std:.0%} of the estimate {theta[j]:.3g}; the data "
                          "barely inform it (see the correlations).")
