@@ -195,3 +195,12 @@ def test_rtcheck_progress_line(capsys, monkeypatch):
         assert ("rtcheck" in term.getvalue()) is shown, term.getvalue()
         if shown:
             assert "/4 " in term.getvalue()       # the reference and three substeps
+
+
+def test_a_sweep_too_large_for_memory_is_refused_not_called_diverged():
+    """1000 s at 10 kHz is 1e7 fixed steps per run: the runs are refused by simulate's
+    memory estimate, and rtcheck says so instead of listing every method as diverged."""
+    from mechatron.errors import RunTooLargeError
+    with pytest.raises(RunTooLargeError, match="1e\\+07 fixed steps"):
+        rtcheck(mt.models.get("dc_motor").build("acausal"), rate=1e4, t_stop=1000.0,
+                solvers=["rk4"], substeps=(1,), measure=False)

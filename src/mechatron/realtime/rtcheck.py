@@ -37,7 +37,7 @@ import numpy as np
 
 import mechatron as mt
 from mechatron.compiler.compiled import CompiledModel
-from mechatron.errors import MechatronError, SimulationError
+from mechatron.errors import MechatronError, RunTooLargeError, SimulationError
 from mechatron.solvers.fixed import (METHODS, ExplicitMethod, ExtrapolatedMethod,
                                      ImplicitMethod)
 from mechatron.solvers.initial import initialize
@@ -290,6 +290,8 @@ def rtcheck(model, *, rate: float, t_stop: float | None = None, params: dict | N
                     idx = np.arange(0, len(run.t), m * stride)
                     F = np.vstack([run[o][idx] for o in outputs])
                     err = _max_error(F, R) if F.shape == R.shape else math.inf
+                except RunTooLargeError:
+                    raise                 # not a divergence: the check is too long
                 except SimulationError:
                     err = math.inf
                 candidates.append(Candidate(solver, h, it, m, err,

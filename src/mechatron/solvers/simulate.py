@@ -9,7 +9,7 @@ import numpy as np
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.compiler.pipeline import compile_model
 from mechatron.core.component import Component
-from mechatron.errors import SimulationError
+from mechatron.errors import RunTooLargeError, SimulationError
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.diagnose import describe_nonfinite
 from mechatron.solvers.fixed import METHODS, integrate_fixed
@@ -43,7 +43,7 @@ def check_fixed_step_size(cm: CompiledModel, t0: float, t_stop: float, dt,
     steps = (float(t_stop) - float(t0)) / float(dt)
     size = (steps + 1) * (len(cm.names) + cm.nx) * 8.0
     if max_memory is not None and size > max_memory:
-        raise SimulationError(
+        raise RunTooLargeError(
             f"model '{cm.name}': dt = {dt:g} s over {t_stop - t0:g} s is {steps:.3g} fixed "
             f"steps, which would keep about {_bytes(size)} in memory ({len(cm.names)} "
             f"logged values and {cm.nx} states per step; limit max_memory = "
