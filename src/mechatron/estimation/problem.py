@@ -149,12 +149,6 @@ class EstimationProblem:
         self.experiments = list(experiments)
         if not self.experiments:
             raise DataError("no experiment given; an estimation needs measured data.")
-        if all(e.outputs and all(not np.any(np.asarray(v, dtype=float))
-                                 for v in e.outputs.values()) for e in self.experiments):
-            names = ", ".join(f"'{e.name}' ({e.source})" for e in self.experiments)
-            raise DataError(f"estimation: every measured output of {names} is zero: such "
-                            "data hold no information about the parameters. Is a sensor "
-                            "not connected, or are the wrong columns read?")
         self.free = [_as_free(f) for f in free]
         self.inputs = dict(inputs or {})
         self.outputs = dict(outputs or {})
@@ -268,6 +262,8 @@ class EstimationProblem:
                 except DataError as exc:
                     problems.append(str(exc))
                     continue
+            if not self.bound:
+                self._check_informative()        # before the first (compiled) trajectory
             traj = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
                               [cm.names.index(self._outspec[lab][0]) for lab in out_labels],
                               substeps=m, hold=e.hold, jit=self._use_jit(e.n * m))
@@ -276,6 +272,16 @@ class EstimationProblem:
         if problems:
             raise DataError(" ".join(problems), problems=problems)
         self._build_residual()
+
+    def _check_informative(self) -> None:
+        """A :class:`DataError` when every measured output of every experiment is zero:
+        such data carry no information, and building the problem would only cost time."""
+        if all(e.outputs and all(not np.any(np.asarray(v, dtype=float))
+                                 for v in e.outputs.values()) for e in self.experiments):
+            names = ", ".join(f"'{e.name}' ({e.source})" for e in self.experiments)
+            raise DataError(f"estimation: every measured output of {names} is zero: such "
+                            "data hold no information about the parameters. Is a sensor "
+                            "not connected, or are the wrong columns read?")
 
     def _use_jit(self, steps: int) -> bool:
         """Native code for long experiments (``jit="auto"``: at least JIT_STEPS substeps
