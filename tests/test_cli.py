@@ -359,3 +359,24 @@ def test_a_full_disk_is_a_one_line_error_naming_the_file(capsys, tmp_path, monke
     assert code == 2 and out == ""
     assert err == f"error: [Errno 28] No space left on device: '{path}'\n"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_fixed_step_run_over_the_memory_limit_needs_force(capsys, monkeypatch):
+    from mechatron import cli
+    monkeypatch.setattr(cli, "MAX_MEMORY", 1e4)            # 10 kB: 0.01 s at 1e-5 s is more
+    code, out, err = run(capsys, "simulate", "dc_motor", "--solver", "rk4", "--dt", "1e-5",
+                         "--t-stop", "0.01")
+    _one_line_exit_2(code, out, err)
+    assert "1e+03 fixed steps" in err and "--force" in err
+    data = run_json(capsys, "simulate", "dc_motor", "--solver", "rk4", "--dt", "1e-5",
+                    "--t-stop", "0.01", "--force")
+    assert data["stats"]["steps"] == 1000
+
+
+def test_usage_errors_are_one_line_too(capsys):
+    code, out, err = run(capsys, "simulate", "--t-stop", "soon")
+    assert code == 2 and out == ""
+    assert err == ("error: mechatron simulate: the following arguments are required: NAME; "
+                   "see `mechatron simulate --help`.\n") or (
+        err.startswith("error: mechatron simulate: argument --t-stop: invalid float value")
+        and err.count("\n") == 1)

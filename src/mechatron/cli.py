@@ -19,14 +19,18 @@ Every subcommand takes ``--help``; ``--json`` prints one JSON object on stdout i
 the human summary. A model (``NAME``) is a database name, a user's file
 ``path/to/model.py[:ClassName]`` or ``package.module:ClassName`` (see
 :mod:`mechatron.models.user`). The library's log (the ``mechatron`` logger) goes to
-stderr: warnings always, what is done with ``-v``, details with ``-vv``.
+stderr: warnings always, what is done with ``-v``, details with ``-vv``. Runs over
+:data:`PROGRESS_DELAY` s show a progress bar (tqdm) on stderr when it is a terminal;
+``-q`` hides it.
 
 Exit codes and errors
 ---------------------
-0 on success; 2 for a usage error (argparse) or a problem with the user's input (any
-:class:`~mechatron.errors.MechatronError`, :class:`ValueError`, :class:`TypeError`, an
-:class:`OSError` such as a missing file or folder or a full disk), reported as one line ``error: <message>`` on stderr; 1 for an
-unexpected error (a bug), also one line, or for a demo whose checks failed. Set
+0 on success; 2 for a usage error (argparse's, also one line) or a problem with the
+user's input (any :class:`~mechatron.errors.MechatronError`, :class:`ValueError`,
+:class:`TypeError`, an :class:`OSError` such as a missing file or folder or a full disk),
+reported as one line ``error: <message>`` on stderr; 1 for an unexpected error (a bug),
+also one line, or for a demo whose checks failed. ``tests/test_cli_fuzz.py`` holds the
+commands to this on random arguments and problem files. Set
 ``MECHATRON_DEBUG=1`` to get the traceback as well.
 
 Later subcommands (``library``, ``codegen``, ``estimate``...) live beside the code they
@@ -65,6 +69,7 @@ from mechatron.results import SUFFIXES as LOG_SUFFIXES
 from mechatron.results import SimResult
 from mechatron.solvers import METHODS as FIXED_STEP_METHODS
 from mechatron.solvers import SOLVERS
+from mechatron.solvers.simulate import MAX_MEMORY
 from mechatron.units import check_number_text
 
 __all__ = ["main", "build_parser", "EXTENSIONS", "DEMO_STEPS", "DemoStep", "DemoRun", "CommandError",
@@ -257,17 +262,20 @@ def _number_or_quantity(key: str, value: str) -> float | str:
 MAX_FIXED_STEPS = 10_000_000
 
 
-def check_step_count(dt: float, t_stop: float, limit: int = MAX_FIXED_STEPS) -> int:
+def check_step_count(dt: float, t_stop: float, limit: int = MAX_FIXED_STEPS, *,
+                     force: bool = False) -> int:
     """The number of fixed steps of ``t_stop / dt``; a :class:`CommandError` naming both
-    when it is above ``limit`` (the run would exhaust the memory, not finish)."""
+    when it is above ``limit`` (the run would exhaust the memory, not finish), unless
+    ``force`` (the command's ``--force``)."""
     if not (isinstance(t_stop, (int, float)) and math.isfinite(t_stop) and t_stop > 0):
         return 0                       # simulate reports a bad t_stop itself
     steps = t_stop / dt
-    if steps > limit:
+    if steps > limit and not force:
         raise CommandError(f"--dt {dt:g} s with t_stop {t_stop:g} s: {steps:.3g} fixed "
                            f"steps, more than the {limit:,} a run may take (each step is "
                            f"kept in memory). Give a larger --dt (at least "
-                           f"{t_stop / limit:.3g} s) or a shorter --t-stop.")
+                           f"{t_stop / limit:.3g} s) or a shorter --t-stop; --force "
+                           f"goes on anyway.")
     return int(math.ceil(steps))
 
 
@@ -334,7 +342,7 @@ class _Settings:
         t_stop = getattr(args, "t_stop", None)
         t_stop = exp.t_stop if t_stop is None else t_stop
         if fixed:
-            check_step_count(dt, t_stop)
+            check_step_count(dt, t_stop, force=getattr(args, "force", False))
         rtol = getattr(args, "rtol", None)
         atol = getattr(args, "atol", None)
         for option, value in (("--rtol", rtol), ("--atol", atol)):
@@ -472,7 +480,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         model = mt.compile_model(model)
         outputs = {name: name for name in model.state_names}
     res = mt.simulate(model, settings.t_stop, solver=settings.solver, dt=settings.dt,
-                      rtol=settings.rtol, atol=settings.atol, inputs=inputs or None)
+                      rtol=settings.rtol, atol=settings.atol, inputs=inputs or None,
+                      max_memory=None if args.force else MAX_MEMORY)
     final = {label: res.final(path) for label, path in outputs.items()}
     units = {label: entry.output_units.get(label, res.units.get(path, ""))
              for label, path in outputs.items()}
@@ -525,9 +534,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
     params = _parse_sets(args.set, entry)
     settings = _Settings.resolve(args, entry)
     out = _output_path(args.out, "--out", _figure_suffixes()) if args.out else None
-    cmp = compare_variants(entry, params=params, t_stop=settings.t_stop,
-                           solver=settings.solver, dt=settings.dt, rtol=settings.rtol,
-                           atol=settings.atol, points=COMPARE_POINTS)
+    with progress(args, total=len(entry.variants), desc="compare", unit="variant") as bar:
+        cmp = compare_variants(entry, params=params, t_stop=settings.t_stop,
+                               solver=settings.solver, dt=settings.dt, rtol=settings.rtol,
+                               atol=settings.atol, points=COMPARE_POINTS,
+                               progress=lambda done, total: bar.update(done - bar.n))
     variants, ref, labels = list(cmp.results), cmp.reference, cmp.labels
 
     files: dict[str, str] = {}
@@ -1025,15 +1036,33 @@ def _add_verbose(p: argparse.ArgumentParser, dest: str) -> None:
                         "-vv: details); warnings are always shown")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a usage error reported as one line, like every other error."""
+
+    def error(self, message: str):
+        self.exit(EXIT_USAGE, f"error: {self.prog}: {_one_line(message)}; see "
+                              f"`{self.prog} --help`.\n")
+
+
+def _add_quiet(p: argparse.ArgumentParser) -> None:
+    names = [n for n in ("-q", "--quiet") if n not in p._option_string_actions]
+    if names:
+        p.add_argument(*names, action="store_true", dest="quiet",
+                       help="no progress bars on stderr (they show only on a terminal, "
+                            "for runs over 2 s)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``mechatron`` command."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mechatron",
         description="Acausal modeling and simulation of mechatronic systems.",
         epilog="Errors are reported as one line on stderr (exit code 2 for bad input); "
                "set MECHATRON_DEBUG=1 for tracebacks.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {mt.__version__}")
     _add_verbose(parser, "verbose")
+    parser.add_argument("-q", "--quiet", action="store_true", dest="quiet_global",
+                        help="no progress bars on stderr")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     p = sub.add_parser("models", help="list the model database",
@@ -1064,6 +1093,9 @@ def build_parser() -> argparse.ArgumentParser:
                         + ", ".join(FIXED_STEP_METHODS) + ") need --dt "
                         "(default: the model's experiment)")
     p.add_argument("--dt", type=float, metavar="H", help="step of a fixed-step solver, in s")
+    p.add_argument("--force", action="store_true",
+                   help="run a fixed-step simulation even when its step count or memory "
+                        "estimate is above the limit")
     p.add_argument("--rtol", type=float, metavar="R", help="relative tolerance")
     p.add_argument("--atol", type=float, metavar="A", help="absolute tolerance")
     p.add_argument("--input", action="append", default=[], metavar="U=VALUE|FILE.csv",
@@ -1101,7 +1133,29 @@ def build_parser() -> argparse.ArgumentParser:
     _add_extensions(sub)
     for command in sub.choices.values():       # `mechatron simulate ... -v` works too
         _add_verbose(command, "verbose_command")
+        _add_quiet(command)
     return parser
+
+
+#: Seconds a run must last before its progress bar appears.
+PROGRESS_DELAY = 2.0
+
+
+def progress(args: argparse.Namespace | None = None, *, total: int | None = None,
+             desc: str = "", unit: str = "it"):
+    """A progress bar (tqdm) on stderr for a run of ``total`` items: it appears only when
+    the run lasts over :data:`PROGRESS_DELAY` s, stderr is a terminal and ``-q`` was not
+    given; otherwise its methods do nothing. Use it as a context manager."""
+    from tqdm import tqdm
+    quiet = args is not None and (getattr(args, "quiet", False)
+                                  or getattr(args, "quiet_global", False))
+    try:
+        tty = sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        tty = False
+    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, delay=PROGRESS_DELAY,
+                disable=quiet or not tty, leave=False, dynamic_ncols=True,
+                mininterval=0.2)
 
 
 #: Helpers for the extension modules of :data:`EXTENSIONS`.

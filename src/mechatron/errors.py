@@ -19,6 +19,7 @@ __all__ = [
     "StructuralError",
     "InitializationError",
     "SimulationError",
+    "RunTooLargeError",
     "DataError",
     "UnknownVariableError",
 ]
@@ -64,6 +65,10 @@ class InitializationError(MechatronError, ValueError):
 
 class SimulationError(MechatronError, RuntimeError):
     """The solver failed (step size too small, Newton failure, chattering)."""
+
+
+class RunTooLargeError(SimulationError):
+    """A run refused before it starts: its estimated memory is above the limit."""
 
 
 class DataError(MechatronError, ValueError):

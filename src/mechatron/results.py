@@ -89,9 +89,11 @@ class SolverStats:
         the stiffness probe's figures), or that it was asked for.
     unconverged_steps : int, optional
         Steps of an implicit fixed-step method whose Newton iteration had not converged
-        after the fixed iteration count (only counted with ``newton="fixed"``, the
+        after the fixed iteration count (only counted with ``newton="count"``, the
         real-time setting; otherwise such a step is an error).
 
+    Notes
+    -----
     The fields can also be read by name, ``stats["solver"]``.
     """
 
@@ -345,6 +347,11 @@ class SimResult:
         """Notebook display: the solver profile, final values and a plot."""
         from mechatron._html import result_html
         return result_html(self)
+
+    def _repr_svg_(self) -> str | None:
+        """Notebook display: a plot of the first variables that change, with units."""
+        from mechatron._html import result_svg
+        return result_svg(self)
 
     def final(self, name: str) -> float:
         """Return the value of a variable at the last time point.

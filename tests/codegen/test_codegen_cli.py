@@ -71,3 +71,25 @@ def test_codegen_refuses_a_step_count_that_cannot_fit(run, tmp_path):
     proc = run("codegen", "dc_motor", "--dt", "1e-12", "--out", str(tmp_path / "c"))
     assert proc.returncode == 2 and "fixed steps" in proc.stderr
     assert not (tmp_path / "c").exists()
+
+
+def test_c_harness_t_stop_inf_is_refused_not_undefined(run, tmp_path):
+    """`--t-stop inf` made the harness convert an infinite step count to long (undefined
+    behaviour); now it, a NaN and a run of more than 1e15 steps are usage errors (exit
+    2), while a finite end time still runs: 0.01 s at dt 1e-4 is 100 steps + 1 row."""
+    import subprocess
+    import shutil
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler")
+    proc = run("codegen", "dc_motor", "--dt", "1e-4", "--t-stop", "0.05", "--out",
+               str(tmp_path), "--check")
+    assert proc.returncode == 0, proc.stderr
+    exe = next(p for p in tmp_path.iterdir() if p.name.endswith("_run"))
+    for value in ("inf", "-inf", "nan", "1e300", "infinity"):
+        res = subprocess.run([str(exe), "--t-stop", value], capture_output=True, text=True,
+                             timeout=30)
+        assert res.returncode == 2 and "--t-stop" in res.stderr, (value, res.stderr)
+        assert res.stdout == ""
+    res = subprocess.run([str(exe), "--t-stop", "0.01"], capture_output=True, text=True,
+                         timeout=30)
+    assert res.returncode == 0 and len(res.stdout.splitlines()) == 1 + 101

@@ -87,3 +87,46 @@ def test_free_parameters_and_design_variables_check_their_bounds():
         with pytest.raises(ParameterError, match="'R': min must be a number, got nan"):
             cls("R", 1.0, math.nan)
         assert cls("R", 7.0, 0.0).max == math.inf
+
+
+def test_optimizer_flags_the_active_constraint(tmp_path, capsys):
+    """The speed PI of the example is limited by the armature current: the fastest step
+    the +-3 A bound allows. The result names that bound as active (the optimum sits on
+    it), and an independent simulation of the optimized gains peaks at 3 A; the step
+    envelope keeps slack and is not named."""
+    import json
+    import shutil
+    from pathlib import Path
+    from mechatron.cli import main
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    cfg = tmp_path / "pi.toml"
+    shutil.copy(examples / "dc_motor_speed_pi_optimize.toml", cfg)
+    code = main(["optimize", str(cfg), "--json", "--quiet"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["active"] == ["i bound"]
+    peak = next(r for r in doc["requirements"] if r["requirement"] == "max i")
+    assert peak["value"] == pytest.approx(3.0, rel=5e-3)
+    code = main(["optimize", str(cfg), "--quiet"])
+    out, _ = capsys.readouterr()
+    assert "active constraints (they decide the optimum): i bound" in out
+
+
+def test_identifiability_flags_by_rule():
+    """The three rules of estimation.problem.identifiability on a made-up Jacobian:
+    a zero column (the outputs do not depend on c), an estimate of exactly 0 (d; not
+    when it sits on its bound, reported there), a std above the estimate (b; only
+    for a converged fit)."""
+    from mechatron.estimation.problem import identifiability
+    J = np.array([[1.0, 0.5, 0.0, 2.0], [0.0, 1.0, 0.0, 1.0]])
+    theta = np.array([1.0, 0.1, 3.0, 0.0])
+    std = np.array([0.1, 0.2, np.inf, 0.01])
+    flags = identifiability(list("abcd"), theta, J, std)
+    assert set(flags) == {"b", "c", "d"}
+    assert flags["c"].startswith("is not identifiable")
+    assert flags["d"].startswith("is estimated as exactly 0")
+    assert flags["b"].startswith("is poorly identifiable: standard deviation 0.2 is more "
+                                 "than 100% of the estimate 0.1")
+    assert set(identifiability(list("abcd"), theta, J, std, converged=False,
+                               on_bound={"d": {}})) == {"c"}

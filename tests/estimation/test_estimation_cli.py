@@ -108,3 +108,68 @@ def test_bad_sample_and_worker_counts(capsys, example):
                        (["--workers", "0"], "--workers: at least 1, got 0")):
         code, out, err = run(capsys, "sensitivity", str(cfg), *argv, "--quiet")
         assert code == 2 and err == f"error: {text}.\n"
+
+
+def test_estimation_on_all_zero_data_is_refused_before_compiling(capsys, example,
+                                                                  tmp_path):
+    """All-zero measurements compiled a 1.5 MB C file for minutes before fitting
+    nothing; now the problem is refused when it is built, naming the experiments."""
+    cfg = example("dc_motor_estimate.toml")
+    data = tmp_path / "dc_motor_data"
+    data.mkdir()
+    rows = "".join(f"{k * 1e-4:g},0,0,0,0\n" for k in range(200))
+    for name in ("multi_step", "locked_rotor"):
+        (data / f"{name}.csv").write_text("t [s],V [V],i [A],phi [rad],w [rad/s]\n" + rows)
+    code, out, err = run(capsys, "estimate", str(cfg), "--quiet")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "every measured output of 'multi_step'" in err and "'locked_rotor'" in err
+    assert "is zero" in err
+    assert not list(tmp_path.rglob("*.c"))
+
+
+def test_dask_without_a_scheduler_is_a_prompt_error(capsys, example):
+    """With dask installed but no scheduler at the address, Dask waited 30 s and the
+    message named no option; now the address is tried first (a refused port answers at
+    once)."""
+    import socket
+    pytest.importorskip("distributed")
+    with socket.socket() as s:                 # a free port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    cfg = example("dc_motor_sensitivity.toml")
+    code, out, err = run(capsys, "sensitivity", str(cfg), "--dask",
+                         f"tcp://127.0.0.1:{port}", "--quiet")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err.startswith(f"error: --dask tcp://127.0.0.1:{port}: no Dask scheduler "
+                          "answers there")
+    assert "--workers N" in err
+    code, out, err = run(capsys, "sensitivity", str(cfg), "--dask", "tcp://nohost", "-q")
+    assert code == 2 and "expected the scheduler's address as tcp://HOST:PORT" in err
+
+
+def test_estimation_flags_unidentifiable_parameters(capsys, example, tmp_path):
+    """From the locked-rotor run alone (w = 0 throughout) the current obeys
+    L di/dt = V - R i: R and L are determined, the inertia J cannot be (the outputs do
+    not depend on it). J is flagged as not identifiable, R and L are not."""
+    cfg = example("dc_motor_estimate.toml")
+    text = cfg.read_text()
+    start = text.index("[[experiments]]")
+    second = text.index("[[experiments]]", start + 1)
+    text = text[:start] + text[second:]                   # drop the multi-step run
+    text = text.replace('w = "rate(phi)"', "")
+    params = text.index("[parameters]")
+    fixed = text.index("[fixed]")
+    text = (text[:params] + "[parameters]\nR = { initial = 10.0, min = 0 }\n"
+            "L = { initial = 2e-4, min = 0 }\nJ = { initial = 1.6e-6, min = 0 }\n\n"
+            + text[fixed:].replace("[fixed]", "[fixed]\nk = 0.151\nB = 1.2e-4\n"
+                                   "T_C = 8.5e-3"))
+    text = text.replace('offsets = ["i"]', "")
+    cfg.write_text(text)
+    code, out, err = run(capsys, "estimate", str(cfg), "--json", "--quiet",
+                         "--max-iterations", "20")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert set(doc["flags"]) == {"J"}, doc["flags"]
+    assert doc["flags"]["J"].startswith("is not identifiable")
+    assert "warning: estimate: J is not identifiable" in err
+    assert doc["parameters"]["R"] == pytest.approx(7.1, rel=0.05)   # table 6-1

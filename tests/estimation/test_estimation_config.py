@@ -125,3 +125,27 @@ def test_the_library_checks_sigma_substeps_and_samples_too():
         run_sensitivity(None, dists, n=0, method="lhs")
     with pytest.raises(ParameterError, match="give at least 3"):
         run_sensitivity(None, dists, n=2, method="sobol")
+
+
+def test_unknown_toml_keys_name_the_nearest_valid_one():
+    cfg = {"modle": {"name": "dc_motor"},
+           "parameters": {"R": {"initial": 7.1, "mni": 0, "maxx": 9}},
+           "options": {"substep": 4}}
+    problems = check_config(cfg, "f.toml")
+    text = "\n".join(problems)
+    assert "unknown section(s) modle (did you mean model?)" in text
+    assert "[parameters] R: unknown key(s) maxx (did you mean max?), mni (did you mean " \
+           "min?)" in text
+    assert "[options]: unknown key(s) substep (did you mean substeps?)" in text
+
+
+def test_substeps_1e5_is_limited():
+    """substeps = 1e5 wrote 80 MB of C; the file check and the library refuse more than
+    MAX_SUBSTEPS."""
+    from mechatron.estimation import EstimationProblem
+    from mechatron.estimation.problem import MAX_SUBSTEPS
+    cfg = {"model": {"name": "dc_motor"}, "options": {"substeps": 100000}}
+    assert any(f"[options] substeps: must be at most {MAX_SUBSTEPS}, got 100000" in p
+               for p in check_config(cfg, "f.toml"))
+    with pytest.raises(ParameterError, match="substeps = 100000 per sample is more than"):
+        EstimationProblem(None, [], [], substeps=100000)

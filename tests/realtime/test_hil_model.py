@@ -109,3 +109,22 @@ def test_mil_tracks_the_references(rate):
         for (t0, v), t1 in zip(exp.reference, [t for t, _ in exp.reference[1:]] + [2.0]):
             held = (r["t"] > t1 - 0.1) & (r["t"] < t1)   # the last 0.1 s of each hold
             assert np.mean(r[var][held]) == pytest.approx(v, rel=0.02), (name, t0)
+
+
+@pytest.mark.parametrize("dt,f_pwm", [(1.0, 5000.0), (0.01, 5000.0), (3.3e-3, 7000.0)])
+def test_hil_rate_1_hz_pwm_average_is_closed_form_and_small(dt, f_pwm, monkeypatch):
+    """`hil --rate 1` unrolled one term per PWM period in a plant step (5,000 at 1 Hz): a
+    megabyte of C and minutes of compiling. Beyond MAX_UNROLLED_PERIODS the high time is
+    the closed form H(t1) - H(t0); it equals the per-period sum (forced here by raising
+    the limit) to 1e-9 of full scale (both floor k dt / T with a 1e-9 guard), with an
+    expression a hundredth of the size or less."""
+    from mechatron.realtime import plant
+    d, k = ca.SX.sym("d"), ca.SX.sym("k")
+    closed = ca.Function("c", [d, k], [pwm_average(d, k, dt, f_pwm, 3.3)])
+    monkeypatch.setattr(plant, "MAX_UNROLLED_PERIODS", 10 ** 9)
+    summed = ca.Function("s", [d, k], [pwm_average(d, k, dt, f_pwm, 3.3)])
+    assert closed.n_instructions() < 100 < summed.n_instructions()
+    rng = np.random.default_rng(1)
+    for duty, kk in zip(rng.uniform(-0.2, 1.2, 12), rng.integers(0, 3000, 12)):
+        assert float(closed(duty, kk)) == pytest.approx(float(summed(duty, kk)),
+                                                        abs=3.3e-9)

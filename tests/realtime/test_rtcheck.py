@@ -166,3 +166,41 @@ def test_rtcheck_command_table(capsys):
     out = capsys.readouterr().out
     assert code == 0
     assert "zero crossings: none" in out and "recommended: rk4" in out
+
+
+def test_rtcheck_progress_line(capsys, monkeypatch):
+    """rtcheck ran 41 s without a word. It reports every stage: the reference, each run
+    of the sweep; the command shows them as a bar on a terminal (after the delay, here
+    0 s), none with -q."""
+    import io
+    import sys
+    from mechatron import cli
+    seen = []
+    rtcheck(mt.models.get("dc_motor").build("acausal"), rate=RATE, t_stop=0.01,
+            solvers=["rk4", "backward_euler"], iterations=(1, 2), substeps=(1, 2),
+            measure=False, progress=lambda done, total, what: seen.append((done, total)))
+    # the reference, rk4 at 2 substeps, backward Euler at 2 iteration counts x 2
+    assert seen == [(k, 7) for k in range(1, 8)]
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+    monkeypatch.setattr(cli, "PROGRESS_DELAY", 0.0)
+    for quiet, shown in (([], True), (["-q"], False)):
+        term = Terminal()
+        monkeypatch.setattr(sys, "stderr", term)
+        code = cli.main(["rtcheck", "dc_motor", "--rate", "10000", "--t-stop", "0.01",
+                         "--solvers", "rk4", "--no-timing", *quiet])
+        assert code == 0
+        assert ("rtcheck" in term.getvalue()) is shown, term.getvalue()
+        if shown:
+            assert "/4 " in term.getvalue()       # the reference and three substeps
+
+
+def test_a_sweep_too_large_for_memory_is_refused_not_called_diverged():
+    """1000 s at 10 kHz is 1e7 fixed steps per run: the runs are refused by simulate's
+    memory estimate, and rtcheck says so instead of listing every method as diverged."""
+    from mechatron.errors import RunTooLargeError
+    with pytest.raises(RunTooLargeError, match="1e\\+07 fixed steps"):
+        rtcheck(mt.models.get("dc_motor").build("acausal"), rate=1e4, t_stop=1000.0,
+                solvers=["rk4"], substeps=(1,), measure=False)

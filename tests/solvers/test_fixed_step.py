@@ -72,3 +72,26 @@ def test_parameters_set_by_path_are_range_checked():
     cm = rc()
     with pytest.raises(mt.errors.ParameterError, match=r"r.R must be >= 0, got -5"):
         mt.simulate(cm, 1.0, params={"r.R": -5})
+
+
+def test_simulate_dt_1e_12_is_refused_with_a_size_estimate():
+    """simulate(dt=1e-12) from Python tried to allocate 5e11 steps. It is refused before
+    any work with the estimate: (steps + 1) x (logged values + states) x 8 bytes, and
+    max_memory=None goes on (checked on a run small enough to finish)."""
+    import mechatron as mt
+    from mechatron.errors import SimulationError
+    from mechatron.solvers.simulate import check_fixed_step_size
+    cm = mt.compile_model(mt.models.get("dc_motor").build("ode"))
+    size = (0.5 / 1e-12 + 1) * (len(cm.names) + cm.nx) * 8
+    with pytest.raises(SimulationError, match=r"5e\+11 fixed steps, which would keep "
+                                              rf"about {size / 1e12:.3g} TB in memory") as e:
+        mt.simulate(cm, 0.5, solver="rk4", dt=1e-12)
+    assert "max_memory=None" in str(e.value) and "--force" in str(e.value)
+    assert check_fixed_step_size(cm, 0.0, 0.01, 1e-5, None) == pytest.approx(
+        1001 * (len(cm.names) + cm.nx) * 8)
+    with pytest.raises(SimulationError, match="limit max_memory = 1 kB"):
+        mt.simulate(cm, 0.01, solver="rk4", dt=1e-5, max_memory=1e3)
+    res = mt.simulate(cm, 0.01, solver="rk4", dt=1e-5, max_memory=None)
+    assert res.stats.steps == 1000
+    with pytest.raises(SimulationError, match="dt must be a step size > 0"):
+        mt.simulate(cm, 0.01, solver="rk4", dt=float("nan"))

@@ -200,6 +200,12 @@ class Element:
         from mechatron._html import component_html
         return component_html(self)
 
+    def _repr_svg_(self) -> str:
+        """Notebook display: the network diagram (parts, ports, connections coloured by
+        domain); Graphviz draws it when installed."""
+        from mechatron._html import component_svg
+        return component_svg(self)
+
     # -- symbols (bound by the compiler) -------------------------------------------------
     def _symbol(self, name: str):
         if self._syms is not None:

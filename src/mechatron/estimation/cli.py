@@ -23,16 +23,27 @@ __all__ = ["add_commands", "Progress"]
 
 
 class Progress:
-    """A progress bar on stderr (``total`` known) or a step counter (``total`` None)."""
+    """Progress on stderr: on a terminal a tqdm bar (``total`` known) or counter, shown
+    once the run lasts over :data:`mechatron.cli.PROGRESS_DELAY` s; otherwise one line
+    per tenth of the run (or per step when ``total`` is None)."""
 
     def __init__(self, label: str, total: int | None = None, *, enabled: bool = True):
         self.label, self.total, self.enabled = label, total, enabled
         self.tty = sys.stderr.isatty()
         self.start = time.perf_counter()
         self._last = 0.0
+        self.bar = None
+        if enabled and self.tty:
+            from mechatron.cli import progress
+            self.bar = progress(total=total, desc=label)
 
     def update(self, done: int, text: str = "") -> None:
         if not self.enabled:
+            return
+        if self.bar is not None:
+            if text:
+                self.bar.set_postfix_str(text, refresh=False)
+            self.bar.update(done - self.bar.n)
             return
         now = time.perf_counter()
         final = self.total is not None and done >= self.total
@@ -52,8 +63,8 @@ class Progress:
             print(line, file=sys.stderr, flush=True)
 
     def close(self) -> None:
-        if self.enabled and self.tty:
-            print(file=sys.stderr, flush=True)
+        if self.bar is not None:
+            self.bar.close()
 
 
 def _out_dir(path: str | None) -> Path | None:
@@ -111,7 +122,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         rows.append([name, f"{res.initial[j]:.6g}", f"{res.values[j]:.6g}",
                      f"[{lo:.6g}, {hi:.6g}]",
                      f"{100 * res.std[j] / abs(res.values[j]):.2f}%" if res.values[j] else "-",
-                     _bound_note(res.at_bound.get(name))])
+                     _bound_note(res.at_bound.get(name)) or _flag_note(res.flags.get(name))])
     emit(table(["parameter", "start", "estimate", "95% interval", "rel. std", "note"], rows,
                right="1234"))
     emit("  fit (NRMSE, 0 = perfect): " + "; ".join(
@@ -247,6 +258,13 @@ def _read_fit(path: str) -> dict:
                            "--out` (no 'parameters' table of numbers).") from None
 
 
+def _flag_note(why: str | None) -> str:
+    if not why:
+        return ""
+    return ("NOT IDENTIFIABLE" if "not identifiable" in why else
+            "ZERO" if "exactly 0" in why else "POORLY IDENTIFIABLE")
+
+
 def _bound_note(hit: dict | None) -> str:
     if not hit:
         return ""
@@ -278,6 +296,33 @@ def _need_dask(where: str) -> None:
                            "(--workers N).")
 
 
+def _reach_scheduler(where: str, address: str, timeout: float = 5.0) -> None:
+    """A :class:`CommandError` at once when no scheduler listens at a TCP ``address``
+    (``tcp://host:port`` or ``host:port``), instead of Dask's 30 s connection timeout."""
+    import socket
+    from urllib.parse import urlsplit
+    text = address if "://" in address else f"tcp://{address}"
+    parts = urlsplit(text)
+    if parts.scheme not in ("tcp", "tls"):
+        return                                  # other transports: Dask checks them
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or port is None:
+        raise CommandError(f"{where} {address}: expected the scheduler's address as "
+                           "tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786.")
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise CommandError(f"{where} {address}: no Dask scheduler answers there "
+                           f"({reason}). Start one (`dask scheduler`, then `dask worker "
+                           f"{address}`) or drop "
+                           f"{'--dask' if where == '--dask' else 'the address'} to run on "
+                           "local processes (--workers N).") from None
+
+
 def _save(out: Path | None, doc: dict, plots, name: str) -> list[Path]:
     """Write the plots (callables taking a path, by file name) and ``doc`` as
     ``name.json`` into ``out``; record the files in ``doc``. Nothing without ``out``."""
@@ -305,7 +350,9 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     workers = args.workers if args.workers is not None else opts.get("workers")
     address = args.dask or opts.get("address")
     if address:
-        _need_dask(args.dask and "--dask" or "[sensitivity] address")
+        where = args.dask and "--dask" or "[sensitivity] address"
+        _need_dask(where)
+        _reach_scheduler(where, str(address))
     total = n * (len(dists) + 2) if method == "sobol" else n
     bar = Progress("sensitivity", total, enabled=not args.quiet)
     res = run_sensitivity(prob, dists, n=n, method=method, seed=int(opts.get("seed", 0)),
@@ -335,7 +382,10 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     emit(f"  ranking by {head} (then Spearman correlation), most important first:")
     emit(table(["parameter"] + res.requirements + [f"rho {r}" for r in res.requirements],
                rows, right="".join(str(k) for k in range(1, 2 * len(res.requirements) + 1))))
-    if res.warnings:
+    if res.warnings and res.ST is None:
+        emit(f"  ! {n} samples are too few for the regression coefficients (see the "
+             f"warning): use more, e.g. --samples {max(4 * n, 10 * (len(res.names) + 1))}.")
+    elif res.warnings:
         emit(f"  ! {len(res.warnings)} Sobol index/indices outside [0, 1] (sampling "
              f"error; see the warnings): use more samples than {n}, e.g. --samples {4 * n}.")
     emit("  best samples (starting values for `mechatron estimate`):")
@@ -374,6 +424,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     emit(table(["design variable", "start", "optimized", "note"],
                [[n, f"{a:.6g}", f"{b:.6g}", _bound_note(res.at_bound.get(n))] for n, a, b in
                 zip(res.names, res.initial, res.values)], right="12"))
+    if res.active:
+        emit(f"  active constraints (they decide the optimum): {', '.join(res.active)}")
     emit("  requirements, checked by an independent variable-step simulation:")
     emit(table(["requirement", "limit", "start", "optimized", "met"],
                [[r["requirement"], f"{r['limit']:.4g} {r['unit']}",

@@ -69,6 +69,16 @@ def load_config(path) -> dict:
     return cfg
 
 
+def _unknown(names, allowed) -> str:
+    """Unknown names, each with the nearest valid one: ``mni (did you mean min?)``."""
+    import difflib
+    out = []
+    for name in names:
+        close = difflib.get_close_matches(str(name), sorted(map(str, allowed)), 1, 0.6)
+        out.append(f"{name} (did you mean {close[0]}?)" if close else str(name))
+    return ", ".join(out)
+
+
 class _Checks:
     """Collects problems of a problem file as ``[table] key: what is wrong``."""
 
@@ -85,7 +95,7 @@ class _Checks:
             return False
         unknown = sorted(set(table) - set(allowed))
         if unknown:
-            self.add(where, f"unknown key(s) {', '.join(unknown)}; known: "
+            self.add(where, f"unknown key(s) {_unknown(unknown, allowed)}; known: "
                             f"{', '.join(sorted(allowed))}")
         for key in required:
             if key not in table:
@@ -93,7 +103,7 @@ class _Checks:
         return True
 
     def number(self, where: str, value, *, positive=False, nonnegative=False,
-               integer=False, minimum=None, units=False):
+               integer=False, minimum=None, maximum=None, units=False):
         """A finite number (or with ``units`` a quantity string); returns it in SI base
         units, or None when it is not one (a problem is recorded)."""
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
@@ -125,6 +135,9 @@ class _Checks:
             return None
         if minimum is not None and x < minimum:
             self.add(where, f"must be at least {minimum}, got {value!r}")
+            return None
+        if maximum is not None and x > maximum:
+            self.add(where, f"must be at most {maximum}, got {value!r}")
             return None
         return x
 
@@ -179,7 +192,7 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
     c = _Checks()
     unknown = sorted(k for k in set(cfg) - _TOP if not k.startswith("_"))   # _dir, _path
     if unknown:
-        c.add("top level", f"unknown section(s) {', '.join(unknown)}; known: "
+        c.add("top level", f"unknown section(s) {_unknown(unknown, _TOP)}; known: "
                            f"{', '.join(sorted(_TOP))}")
     if "title" in cfg:
         c.text("title", cfg["title"])
@@ -235,7 +248,9 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
     opts = cfg.get("options", {})
     if c.keys("[options]", opts, ("substeps", "jit", "smooth")):
         if "substeps" in opts:
-            c.number("[options] substeps", opts["substeps"], integer=True, minimum=1)
+            from mechatron.estimation.problem import MAX_SUBSTEPS
+            c.number("[options] substeps", opts["substeps"], integer=True, minimum=1,
+                     maximum=MAX_SUBSTEPS)
         if "smooth" in opts:
             c.number("[options] smooth", opts["smooth"], positive=True)
         if "jit" in opts and opts["jit"] not in (True, False, "auto"):

@@ -287,6 +287,9 @@ class ResponseResult:
     #: :func:`~mechatron.estimation.bounds.at_bounds`); such a value is not an interior
     #: optimum.
     at_bound: dict = field(default_factory=dict)
+    #: Requirements whose constraints are active at the optimum (slack below 1e-3 of
+    #: their size): they, not the objective alone, decide the gains.
+    active: list = field(default_factory=list)
 
     @property
     def parameters(self) -> dict:
@@ -295,7 +298,7 @@ class ResponseResult:
     def to_dict(self) -> dict:
         return {"parameters": self.parameters,
                 "initial": dict(zip(self.names, map(float, self.initial))),
-                "at_bound": self.at_bound,
+                "at_bound": self.at_bound, "active": self.active,
                 "objective_initial": self.objective_initial, "objective": self.objective,
                 "max_violation_initial": self.max_violation_initial,
                 "max_violation": self.max_violation, "iterations": self.iterations,
@@ -392,13 +395,40 @@ def optimize_response(problem: ResponseProblem, *, max_iterations: int = 100,
     message = str(sol.message)
     if hits:
         log.warning("optimize: %s", describe_at_bounds(hits, "gain"))
+    active = active_requirements(prob, x)
+    if active:
+        log.info("optimize: active requirement(s), which decide the optimum: %s",
+                 ", ".join(active))
     return ResponseResult(names=names, initial=prob.x0, values=x,
                           objective_initial=f0, objective=prob.objective(x)[0],
                           max_violation_initial=v0, max_violation=viol(x),
                           history=history, iterations=int(sol.nit),
                           wall_time=time.perf_counter() - start,
                           success=bool(sol.success) and viol(x) <= 1e-6,
-                          message=message, problem=prob, at_bound=hits)
+                          message=message, problem=prob, at_bound=hits, active=active)
+
+
+def _requirement_label(r) -> str:
+    kind = {"StepResponse": "step envelope", "SignalBound": "bound"}.get(type(r).__name__,
+                                                                       type(r).__name__)
+    return f"{r.signal} {kind}"
+
+
+def active_requirements(problem: ResponseProblem, x, tol: float = 1e-3) -> list[str]:
+    """The requirements whose constraints hold with a slack below ``tol`` (relative to
+    each requirement's size, beyond the problem's ``margin``) at ``x``: the optimum sits on them, so relaxing one changes
+    it (a Lagrange multiplier would be nonzero). Tracking objectives are never active."""
+    import copy
+    out = []
+    for r in problem.requirements:
+        if isinstance(r, Tracking):
+            continue
+        one = copy.copy(problem)
+        one.requirements = [r]
+        c = one.constraints(np.asarray(x, dtype=float))[0]      # tightened by margin
+        if c.size and float(c.min()) <= tol:
+            out.append(_requirement_label(r))
+    return out
 
 
 # ---------------------------------------------------------------------- verification

@@ -103,6 +103,12 @@ def compiled(model) -> CompiledModel:
     return model if isinstance(model, CompiledModel) else mt.compile_model(model)
 
 
+
+#: The most Radau substeps per sample an estimation problem takes (the step functions
+#: unroll them).
+MAX_SUBSTEPS = 1000
+
+
 class EstimationProblem:
     """Model, experiments, what is free, and how the data bind to the model.
 
@@ -160,6 +166,12 @@ class EstimationProblem:
                                   or m < 1):
                 raise ParameterError(f"estimation: substeps must be a whole number >= 1 "
                                      f"(or None to choose them), got {substeps!r}.")
+            if m is not None and m > MAX_SUBSTEPS:
+                raise ParameterError(f"estimation: substeps = {m} per sample is more than "
+                                     f"the {MAX_SUBSTEPS} the step functions are built for "
+                                     "(the generated code grows with them: 1e5 gave 80 MB "
+                                     "of C); resample the data or give fewer substeps, or "
+                                     "none to choose them.")
         self.cm, found = prepare_delays(model, dict(inputs or {}))
         self.input_delays = {**found, **dict(input_delays or {})}
         check_model(self.cm, "estimation")
@@ -333,6 +345,8 @@ class EstimationProblem:
                 except DataError as exc:
                     problems.append(str(exc))
                     continue
+            if not self.bound:
+                self._check_informative()        # before the first (compiled) trajectory
             paths = list(dict.fromkeys(p for lab in out_labels
                                        for p in self._outspec[lab].paths))
             traj = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
@@ -351,6 +365,16 @@ class EstimationProblem:
         if problems:
             raise DataError(" ".join(problems), problems=problems)
         self._build_residual()
+
+    def _check_informative(self) -> None:
+        """A :class:`DataError` when every measured output of every experiment is zero:
+        such data carry no information, and building the problem would only cost time."""
+        if all(e.outputs and all(not np.any(np.asarray(v, dtype=float))
+                                 for v in e.outputs.values()) for e in self.experiments):
+            names = ", ".join(f"'{e.name}' ({e.source})" for e in self.experiments)
+            raise DataError(f"estimation: every measured output of {names} is zero: such "
+                            "data hold no information about the parameters. Is a sensor "
+                            "not connected, or are the wrong columns read?")
 
     def _use_jit(self, steps: int) -> bool:
         """Native code for long experiments (``jit="auto"``: at least JIT_STEPS substeps
@@ -653,6 +677,10 @@ class EstimationResult:
     warnings: list = field(default_factory=list)
     #: Profile-likelihood 95% intervals of the parameters asked for.
     profile_ci95: dict = field(default_factory=dict)
+    #: Parameters the data cannot determine, ``{name: why}`` (see
+    #: :func:`identifiability`): zero, without influence on the outputs, or with a
+    #: standard deviation above the estimate.
+    flags: dict = field(default_factory=dict)
 
     @property
     def parameters(self) -> dict:
@@ -661,7 +689,7 @@ class EstimationResult:
     def to_dict(self) -> dict:
         return {"parameters": self.parameters,
                 "initial": dict(zip(self.names, map(float, self.initial))),
-                "at_bound": self.at_bound,
+                "at_bound": self.at_bound, "flags": self.flags,
                 "ci95": {k: [float(lo), float(hi)] for k, (lo, hi) in self.ci95.items()},
                 "std": dict(zip(self.names, map(float, self.std))),
                 "covariance": self.covariance,
@@ -945,6 +973,10 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     hits = at_bounds(prob.names, theta, lo_b, hi_b)
     if hits:
         log.warning("estimate: %s", describe_at_bounds(hits, "estimate"))
+    flags = identifiability(prob.names, theta, J, std, converged=bool(success),
+                            on_bound=hits)
+    for name, why in flags.items():
+        log.warning("estimate: %s %s", name, why)
     return EstimationResult(
         names=list(prob.names), initial=prob.initial, values=theta, std=std, ci95=ci,
         correlation=corr, cost_initial=cost0, cost=cost,
@@ -954,7 +986,8 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
         success=bool(success), message=message, problem=prob, at_bound=hits,
         covariance=covariance, std_white=std_white, ci95_white=ci_white,
         bandwidth_fraction=b, residual_rho1=rho1, warnings=warnings,
-        profile_ci95=profile_ci, validation=validation_errors(prob, theta))
+        profile_ci95=profile_ci, validation=validation_errors(prob, theta),
+        flags=flags)
 
 
 def residual_rho1(prob: EstimationProblem, r: np.ndarray) -> dict:
@@ -965,4 +998,35 @@ def residual_rho1(prob: EstimationProblem, r: np.ndarray) -> dict:
         for lab, (rows, _k) in zip(b["out_labels"], segments):
             out[f"{b['exp'].name}/{lab}"] = float(acf(r[rows], 1)[-1]) \
                 if r[rows].size > 2 else 0.0
+    return out
+
+
+
+
+def identifiability(names, theta, J, std, *, rel_column: float = 1e-8,
+                    rel_std: float = 1.0, converged: bool = True,
+                    on_bound=()) -> dict:
+    """Parameters the data cannot determine, ``{name: why}``: an estimate of exactly 0
+    (no relative uncertainty, and rarely what the physics means), a column of the
+    (scaled) Jacobian ``J`` below ``rel_column`` of the largest (the outputs do not
+    depend on it), or a standard deviation above ``rel_std`` times the estimate (the
+    95% interval spans zero twice over: the data barely inform it); the last only when
+    the fit ``converged`` (away from an optimum the covariance means nothing). A zero on
+    a bound (names in ``on_bound``) is reported as on its bound instead."""
+    J = np.asarray(J, dtype=float)
+    norms = np.linalg.norm(J, axis=0) if J.size else np.zeros(len(names))
+    top = float(norms.max()) if norms.size else 0.0
+    out = {}
+    for j, name in enumerate(names):
+        if top == 0.0 or norms[j] <= rel_column * top:
+            out[name] = ("is not identifiable: the measured outputs do not depend on it "
+                         "(its Jacobian column is zero); fix it, or add an experiment "
+                         "that excites it.")
+        elif theta[j] == 0.0 and name not in on_bound:
+            out[name] = ("is estimated as exactly 0: is it needed, or is 0 its bound? Its "
+                         "relative uncertainty is undefined.")
+        elif converged and (not np.isfinite(std[j]) or std[j] > rel_std * abs(theta[j])):
+            out[name] = (f"is poorly identifiable: standard deviation {std[j]:.3g} is more "
+                         f"than {rel_std:.0%} of the estimate {theta[j]:.3g}; the data "
+                         "barely inform it (see the correlations).")
     return out

@@ -127,6 +127,34 @@ def standardized_regression(X: np.ndarray, y: np.ndarray):
     return coef[:-1], float(r2)
 
 
+def regression_intervals(X: np.ndarray, Y: np.ndarray, *, resamples: int = 200,
+                         level: float = 0.95, seed: int = 0):
+    """Bootstrap intervals of the standardized regression coefficients of a Monte Carlo
+    run: rows resampled with replacement, :func:`standardized_regression` recomputed;
+    ``(low, high)``, each ``(d, n_req)`` (the central ``level`` range)."""
+    n, d = X.shape
+    low, high = np.full((d, Y.shape[1]), np.nan), np.full((d, Y.shape[1]), np.nan)
+    if n < d + 2:
+        return low, high
+    rng = np.random.default_rng(seed)
+    q = [50 * (1 - level), 50 * (1 + level)]
+    for a in range(Y.shape[1]):
+        draws = []
+        for _ in range(resamples):
+            k = rng.integers(0, n, n)
+            if np.any(X[k].std(0) == 0):
+                continue
+            draws.append(standardized_regression(X[k], Y[k, a])[0])
+        if draws:
+            low[:, a], high[:, a] = np.percentile(np.array(draws), q, axis=0)
+    return low, high
+
+
+#: Monte Carlo samples per parameter (plus one) below which regression coefficients are
+#: flagged as unreliable.
+SAMPLES_PER_PARAMETER = 10
+
+
 def sobol_indices(fA: np.ndarray, fB: np.ndarray, fAB: np.ndarray):
     """First-order and total Sobol indices from the Saltelli design outputs.
 
@@ -226,10 +254,12 @@ class SensitivityResult:
     workers: int
     failed: int = 0
     extra: dict = field(default_factory=dict)
-    #: Bootstrap 95% intervals of the Sobol indices: ``S1_low``, ``S1_high``, ``ST_low``,
-    #: ``ST_high``, each ``(d, n_req)`` (empty without Sobol sampling).
+    #: Bootstrap 95% intervals: of the Sobol indices (``S1_low``, ``S1_high``, ``ST_low``,
+    #: ``ST_high``) or, for random and LHS sampling, of the regression coefficients
+    #: (``src_low``, ``src_high``); each ``(d, n_req)``.
     intervals: dict = field(default_factory=dict)
-    #: Problems with the statistics (Sobol indices outside [0, 1]), also logged.
+    #: Problems with the statistics (Sobol indices outside [0, 1], too few Monte Carlo
+    #: samples for the regression), also logged.
     warnings: list = field(default_factory=list)
 
     @property
@@ -417,6 +447,17 @@ def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol"
         src[:, a], r2[a] = standardized_regression(Xs, y)
     S1 = ST = None
     intervals, warnings = {}, []
+    if method != "sobol":
+        lo, hi = regression_intervals(Xs, Ys, seed=seed)
+        intervals = {"src_low": lo, "src_high": hi}
+        need = SAMPLES_PER_PARAMETER * (d + 1)
+        if len(Xs) < need:
+            width = float(np.nanmax(hi - lo)) if np.any(np.isfinite(hi - lo)) else math.inf
+            warnings.append(f"sensitivity: {len(Xs)} Monte Carlo samples for {d} "
+                            f"parameter(s) are too few for the regression coefficients "
+                            f"(widest 95% interval {width:.3g}); use at least {need} "
+                            f"({SAMPLES_PER_PARAMETER} per parameter and one).")
+            log.warning(warnings[-1])
     if method == "sobol":
         fA, fB = Y[:n], Y[n:2 * n]
         fAB = Y[2 * n:].reshape(d, n, len(reqs))

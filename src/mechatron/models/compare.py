@@ -85,13 +85,14 @@ def compare_variants(entry: ModelEntry, *, params: dict | None = None,
                      t_stop: float | None = None, solver: str | None = None,
                      dt: float | None = None, rtol: float | None = None,
                      atol: float | None = None, points: int = COMPARE_POINTS,
-                     variants: list[str] | None = None) -> Comparison:
+                     variants: list[str] | None = None, progress=None) -> Comparison:
     """Simulate every variant of ``entry`` (default: its experiment's settings) on a common
     grid of ``points`` output times and measure each output's deviation from the first.
 
     A variant with external inputs runs on the entry's ``reference_inputs`` (the signals
     that reproduce the built-in sources); ``driven_variants`` (open-loop plants for an
-    outside controller) are left out unless named in ``variants``."""
+    outside controller) are left out unless named in ``variants``.
+    ``progress(done, total)`` is called after each variant's run."""
     exp = entry.experiment
     params = params or {}
     t_stop = exp.t_stop if t_stop is None else t_stop
@@ -106,6 +107,8 @@ def compare_variants(entry: ModelEntry, *, params: dict | None = None,
                               rtol=exp.rtol if rtol is None else rtol,
                               atol=exp.atol if atol is None else atol, t_out=grid,
                               inputs=entry.inputs_for(v, t_stop, **params))
+        if progress is not None:
+            progress(len(results), len(variants))
     cmp = Comparison(entry, results)
     ref = variants[0]
     ref_paths = entry.output_paths(ref)

@@ -44,7 +44,7 @@ def add_rtcheck_command(sub) -> None:
 def cmd_rtcheck(args) -> int:
     import math
 
-    from mechatron.cli import CommandError, _parse_sets, emit, emit_json, table
+    from mechatron.cli import CommandError, _parse_sets, emit, emit_json, progress, table
     from mechatron.models.user import entry_for
     from mechatron.realtime.rtcheck import rtcheck
 
@@ -57,9 +57,16 @@ def cmd_rtcheck(args) -> int:
     outputs = list(entry.output_paths(variant).values())
     t_stop = args.t_stop if args.t_stop is not None else entry.experiment.t_stop
     solvers = [s.strip() for s in args.solvers.split(",")] if args.solvers else None
-    r = rtcheck(model, rate=args.rate, t_stop=t_stop, outputs=outputs, solvers=solvers,
-                tolerance=args.tolerance, min_margin=args.min_margin,
-                measure=not args.no_timing)
+    with progress(args, desc="rtcheck", unit="run") as bar:
+        def tell(done, total, what):
+            if bar.total != total:
+                bar.total = total
+                bar.refresh()
+            bar.set_postfix_str(what, refresh=False)
+            bar.update(done - bar.n)
+        r = rtcheck(model, rate=args.rate, t_stop=t_stop, outputs=outputs,
+                    solvers=solvers, tolerance=args.tolerance,
+                    min_margin=args.min_margin, measure=not args.no_timing, progress=tell)
     if args.json:
         emit_json({"variant": variant, "set": params, **r.as_dict()})
         return 0

@@ -136,6 +136,10 @@ def build_plant(**overrides) -> HILPlant:
     return m
 
 
+#: Above this many PWM periods per plant step, :func:`pwm_average` uses its closed form.
+MAX_UNROLLED_PERIODS = 16
+
+
 def pwm_average(duty, k, dt: float, f_pwm: float, v_high: float):
     """Mean pin voltage over plant step ``k`` (``[k dt, (k+1) dt]``) of an edge-aligned
     PWM of period ``T = 1/f_pwm`` whose pulse ``[jT, jT + duty T]`` starts every period.
@@ -148,6 +152,16 @@ def pwm_average(duty, k, dt: float, f_pwm: float, v_high: float):
     n_periods = int(math.ceil(dt / T)) + 1
     t0 = k * dt
     t1 = t0 + dt
+    if n_periods > MAX_UNROLLED_PERIODS:
+        # a slow plant step spans many periods: the closed form of the high time since 0,
+        # H(t) = n d T + min(t - n T, d T) with n = floor(t / T), instead of one term per
+        # period (at 1 Hz and a 5 kHz carrier, 5,000 terms and a megabyte of C)
+        d = ca.fmin(ca.fmax(duty, 0), 1)
+
+        def since_zero(t):
+            n = ca.floor(t / T + 1e-9)
+            return n * d * T + ca.fmax(ca.fmin(t - n * T, d * T), 0)
+        return v_high * (since_zero(t1) - since_zero(t0)) / dt
     j0 = ca.floor(t0 / T + 1e-9)       # guard against k*dt/T landing just below an integer
     d = ca.fmin(ca.fmax(duty, 0), 1)
     high = 0

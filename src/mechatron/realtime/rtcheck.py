@@ -37,7 +37,7 @@ import numpy as np
 
 import mechatron as mt
 from mechatron.compiler.compiled import CompiledModel
-from mechatron.errors import MechatronError, SimulationError
+from mechatron.errors import MechatronError, RunTooLargeError, SimulationError
 from mechatron.solvers.fixed import (METHODS, ExplicitMethod, ExtrapolatedMethod,
                                      ImplicitMethod)
 from mechatron.solvers.initial import initialize
@@ -200,7 +200,7 @@ def _max_error(fixed: np.ndarray, ref: np.ndarray) -> float:
 def rtcheck(model, *, rate: float, t_stop: float | None = None, params: dict | None = None,
             outputs=None, solvers=None, substeps=(1, 2, 4), iterations=(1, 2, 3),
             tolerance: float = 1e-3, min_margin: float = 0.5, measure: bool = True,
-            timing_steps: int = 200_000, workdir=None) -> RTCheck:
+            timing_steps: int = 200_000, workdir=None, progress=None) -> RTCheck:
     """Check a model for real time at ``rate`` Hz (see the module docstring).
 
     Parameters
@@ -228,6 +228,9 @@ def rtcheck(model, *, rate: float, t_stop: float | None = None, params: dict | N
     measure : bool
         Compile and time the generated C (else the timing columns stay empty and the
         recommendation uses the operation count).
+    progress : callable, optional
+        Called as ``progress(done, total, what)`` after the reference run, each fixed-step
+        run of the sweep and each C build and timing (the command line shows a bar).
     """
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise SimulationError(f"rtcheck: the rate must be a number of Hz > 0, got {rate!r}.")
@@ -248,7 +251,14 @@ def rtcheck(model, *, rate: float, t_stop: float | None = None, params: dict | N
     t_stop = float(grid[-1])
     p = cm.parameter_vector(params)
 
+    runs = sum(1 if s in EXPLICIT else len(tuple(iterations)) for s in solvers) \
+        * len(tuple(substeps))
+    builds = (sum(1 if s in EXPLICIT else len(tuple(iterations)) for s in solvers)
+              if measure else 0)
+    total = 1 + runs + builds
+    tell = progress or (lambda done, total, what: None)
     ref = mt.simulate(cm, t_stop, params=params, rtol=1e-10, atol=1e-12, t_out=grid)
+    tell(1, total, "reference run")
     if outputs is None:
         outputs = [s for s in cm.state_names if s in ref.names] or list(ref.names)
     missing = [o for o in outputs if o not in ref.names]
@@ -280,11 +290,15 @@ def rtcheck(model, *, rate: float, t_stop: float | None = None, params: dict | N
                     idx = np.arange(0, len(run.t), m * stride)
                     F = np.vstack([run[o][idx] for o in outputs])
                     err = _max_error(F, R) if F.shape == R.shape else math.inf
+                except RunTooLargeError:
+                    raise                 # not a divergence: the check is too long
                 except SimulationError:
                     err = math.inf
                 candidates.append(Candidate(solver, h, it, m, err,
                                             _stable(solver, h, eigs)))
-    _timing(cm, candidates, params, measure, timing_steps, workdir, rate)
+                tell(1 + len(candidates), total, f"{solver} dt {h:.3g} s")
+    _timing(cm, candidates, params, measure, timing_steps, workdir, rate,
+            lambda k, what: tell(1 + runs + k, total, what))
     for c in candidates:
         c.ok = (c.max_error <= tolerance
                 and (c.margin is None or c.margin >= min_margin))
@@ -319,7 +333,7 @@ def _stiffness(eigs: np.ndarray, T: float, solvers) -> dict:
             "explicit_stable_at_rate": bool(explicit_ok)}
 
 
-def _timing(cm, candidates, params, measure, steps, workdir, rate) -> None:
+def _timing(cm, candidates, params, measure, steps, workdir, rate, tell=None) -> None:
     """ns per step of the compiled C of each (solver, iterations), and the margins."""
     if not measure:
         return
@@ -335,6 +349,8 @@ def _timing(cm, candidates, params, measure, steps, workdir, rate) -> None:
                                   iterations=c.iterations or 1, params=params)
                 build(code)
                 cache[key] = measure_ns_per_step(code, steps=steps)["ns_per_step"]
+                if tell is not None:
+                    tell(len(cache), f"C of {c.solver} built and timed")
             c.ns_per_step = cache[key]
             c.margin = 1.0 - c.steps_per_period * c.ns_per_step * 1e-9 * rate
 

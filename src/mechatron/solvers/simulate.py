@@ -10,7 +10,7 @@ import numpy as np
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.compiler.pipeline import compile_model
 from mechatron.core.component import Component
-from mechatron.errors import SimulationError
+from mechatron.errors import RunTooLargeError, SimulationError
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.diagnose import describe_nonfinite
 from mechatron.solvers.fixed import METHODS, integrate_fixed
@@ -27,12 +27,46 @@ __all__ = ["simulate", "SOLVERS"]
 SOLVERS = ("auto",) + tuple(PLUGINS) + ("rodas4",) + tuple(METHODS)
 DEFAULT_POINTS = 1001
 
+#: Default limit on the estimated memory of a fixed-step run (bytes): every step is kept.
+MAX_MEMORY = 2e9
+
+
+def check_fixed_step_size(cm: CompiledModel, t0: float, t_stop: float, dt,
+                          max_memory: float | None = MAX_MEMORY) -> float:
+    """Estimated memory (bytes) of a fixed-step run from ``t0`` to ``t_stop`` with step
+    ``dt``: every step keeps the states and every logged value as float64. A
+    :class:`SimulationError` with the estimate when it exceeds ``max_memory`` (``None``:
+    no limit), before any work is done."""
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating, np.integer)) \
+            or not (np.isfinite(dt) and dt > 0):
+        raise SimulationError(f"model '{cm.name}': dt must be a step size > 0 in s for a "
+                              f"fixed-step solver, got {dt!r}.", path=cm.name)
+    steps = (float(t_stop) - float(t0)) / float(dt)
+    size = (steps + 1) * (len(cm.names) + cm.nx) * 8.0
+    if max_memory is not None and size > max_memory:
+        raise RunTooLargeError(
+            f"model '{cm.name}': dt = {dt:g} s over {t_stop - t0:g} s is {steps:.3g} fixed "
+            f"steps, which would keep about {_bytes(size)} in memory ({len(cm.names)} "
+            f"logged values and {cm.nx} states per step; limit max_memory = "
+            f"{_bytes(max_memory)}). Give a larger dt (at least "
+            f"{dt * size / max_memory:.3g} s) or a shorter t_stop; or max_memory=None to "
+            "go on anyway (command line: --force).", path=cm.name)
+    return size
+
+
+def _bytes(n: float) -> str:
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{n:.0f} B"
+
 
 def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = None,
              params: dict | None = None, inputs=None, rtol: float = 1e-6,
              atol: float = 1e-8, t_out=None, t0: float = 0.0, iterations: int = 3,
              max_step: float | None = None, newton: str = "check", log="states",
-             linear_solver: str = "auto") -> SimResult:
+             linear_solver: str = "auto",
+             max_memory: float | None = MAX_MEMORY) -> SimResult:
     """Simulate a model; its simlog has every variable.
 
     Parameters
@@ -88,6 +122,10 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         :data:`mechatron.solvers.variable.LINEAR_SOLVERS`): ``"auto"`` sparse QR,
         ``"sparse"`` sparse LU, ``"dense"`` dense LU. The Jacobian's sparsity comes from
         the compiled model.
+    max_memory : float or None
+        Largest estimated memory (bytes) of a fixed-step run, which keeps every step: a
+        run estimated above it is refused before it starts, with the estimate (default
+        :data:`MAX_MEMORY`); ``None`` goes on anyway.
     """
     if solver not in SOLVERS:
         raise SimulationError(f"unknown solver '{solver}'. Choose one of "
@@ -114,6 +152,8 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         raise SimulationError(f"model '{cm.name}': t_stop must be a number > t0 = {t0:g}, "
                               f"got {t_stop!r}.")
     asked = _asked_rows(cm, log)
+    if solver in METHODS:
+        check_fixed_step_size(cm, t0, t_stop, dt, max_memory)
     p = cm.parameter_vector(params)
     ext = resolve_inputs(cm, inputs, params, t0, t_stop)   # external inputs, or None
     if ext is not None:
