@@ -269,6 +269,7 @@ def problem_dir(tmp_path_factory):
     folder = tmp_path_factory.mktemp("problems")
     for name, _ in PROBLEMS.values():
         shutil.copy(EXAMPLES / name, folder / name)
+    shutil.copy(EXAMPLES / "rigs.py", folder / "rigs.py")      # the problems' own models
     for command, (name, options) in PROBLEMS.items():
         if command != "optimize":
             assert main([command, str(folder / name), "--samples" if command ==

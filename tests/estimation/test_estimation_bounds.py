@@ -101,6 +101,7 @@ def test_optimizer_flags_the_active_constraint(tmp_path, capsys):
     examples = Path(__file__).resolve().parents[2] / "examples"
     cfg = tmp_path / "pi.toml"
     shutil.copy(examples / "dc_motor_speed_pi_optimize.toml", cfg)
+    shutil.copy(examples / "rigs.py", tmp_path / "rigs.py")     # the file's own model
     code = main(["optimize", str(cfg), "--json", "--quiet"])
     out, err = capsys.readouterr()
     assert code == 0, err

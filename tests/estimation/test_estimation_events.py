@@ -159,8 +159,8 @@ def test_a_clock_between_the_substeps_is_refused():
     """Data sampled at 15 ms against a 10 ms controller: ticks fall inside intervals."""
     t = np.round(np.arange(0, 0.3 + 1e-9, 0.015), 12)
     cm = mt.compile_model(SampledPIServo())
-    exp = Experiment(t=t, inputs={"r": np.ones(t.size)}, outputs={"y": np.zeros(t.size)},
-                     sigma={"y": 0.01}, name="coarse")
+    exp = Experiment(t=t, inputs={"r": np.ones(t.size)}, outputs={"y": 1 - np.exp(-t / 0.05)},
+                     sigma={"y": 0.01}, name="coarse")     # (all-zero data are refused first)
     with pytest.raises(DataError, match=r"ticks at t = 0\.01 s, between the substeps"):
         EstimationProblem(cm, [exp], ["K"], inputs={"r": "r"}, outputs={"y": "w"},
                           substeps=1)

@@ -125,6 +125,7 @@ def test_monte_carlo_with_too_few_samples_warns(capsys, tmp_path):
     examples = Path(__file__).resolve().parents[2] / "examples"
     cfg = tmp_path / "s.toml"
     shutil.copy(examples / "dc_motor_sensitivity.toml", cfg)
+    shutil.copy(examples / "rigs.py", tmp_path / "rigs.py")     # the file's own model
     code = main(["sensitivity", str(cfg), "--method", "lhs", "--samples", "20",
                  "--workers", "1", "--quiet"])
     out, err = capsys.readouterr()

@@ -152,14 +152,17 @@ def cmd_estimate(args: argparse.Namespace) -> int:
 
 
 class _Drop(logging.Filter):
+    """Drops the records the summary prints itself (``extra={"in_summary": True}``)."""
+
     def filter(self, record) -> bool:
-        return False
+        return not getattr(record, "in_summary", False)
 
 
 @contextlib.contextmanager
 def _printed_here():
-    """Hold back the estimator's warnings (correlated residuals, parameters at bounds or
-    poorly identified): the command prints them in its summary and JSON."""
+    """Hold back the estimator's uncertainty warnings (correlated residuals, poorly
+    identified parameters): the command prints them in its summary and JSON. Flags of
+    parameters on a bound or not identifiable are still logged."""
     logger = logging.getLogger("mechatron.estimation.problem")
     drop = _Drop()
     logger.addFilter(drop)

@@ -955,7 +955,7 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
             "intervals assume white noise (covariance=\"white\"): they are too narrow. "
             "Use covariance=\"hac\".")
     for w in warnings:
-        log.warning("estimate: %s", w)
+        log.warning("estimate: %s", w, extra={"in_summary": True})
     profile_ci = {}
     if profile:
         names = list(prob.names) if profile is True else list(profile)
