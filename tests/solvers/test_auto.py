@@ -2,6 +2,7 @@
 the stiffness probe finds the model stiff (or it is a DAE), else Dormand-Prince.
 ``stats.solver`` and ``stats.solver_reason`` say which ran and why."""
 
+import casadi as ca
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -128,6 +129,29 @@ def test_a_small_ode_without_events_runs_compiled_by_default():
     assert again.stats.solver == "rodas4"
     assert cm2._cache["native_rodas4"].path == cm._cache["native_rodas4"].path
     assert np.max(np.abs(again["x"] - 0.5 * np.exp(-t))) < 1e-6
+
+
+class KinkedLag(mt.Component):
+    """A fast lag (1 us) following a triangle wave written without an event (``fabs`` of
+    a sawtooth from ``floor``): kinks in the right-hand side that no event marks."""
+
+    x = mt.Variable("1", start=0.0)
+
+    def equations(self):
+        saw = self.time / 1e-3 - ca.floor(self.time / 1e-3)
+        return [1e-6 * mt.der(self.x) == -self.x + ca.fabs(2 * saw - 1)]
+
+
+def test_auto_leaves_a_kinked_right_hand_side_to_cvodes():
+    """A Rosenbrock step with its (stiffly damped) error estimate steps over such kinks
+    and interpolates through them; CVODES shortens its steps there. The choice is read
+    from the expression graph; the result follows the triangle to the lag's error."""
+    res = mt.simulate(KinkedLag(), 3e-3, t_out=np.linspace(0.0, 3e-3, 601), rtol=1e-8,
+                      atol=1e-10)
+    assert res.stats.solver == "cvodes"
+    t = res.t[10:]
+    tri = np.abs(2 * (t / 1e-3 - np.floor(t / 1e-3)) - 1)
+    assert np.max(np.abs(res["x"][10:] - tri)) < 5e-3    # lag of 1 us on slope 2000/s
 
 
 def test_a_solver_asked_for_says_so():

@@ -139,11 +139,32 @@ class _Library:
         self.run = fn
 
 
+#: Operations whose result has a kink or a jump: a Rosenbrock step carries no event
+#: location, and its embedded error estimate (damped on stiff components) can step over a
+#: kink that its interpolant then misses, so ``auto`` leaves right-hand sides with them to
+#: CVODES (which shortens its steps there).
+_NONSMOOTH = frozenset(getattr(ca, f"OP_{name}") for name in (
+    "IF_ELSE_ZERO", "FABS", "FMIN", "FMAX", "FLOOR", "CEIL", "SIGN", "COPYSIGN", "FMOD",
+    "REMAINDER", "LT", "LE", "EQ", "NE", "NOT", "AND", "OR"))
+
+
+def smooth_rhs(cm: CompiledModel) -> bool:
+    """Whether the ODE right-hand side of ``cm`` is built from smooth operations only
+    (none of :data:`_NONSMOOTH`); decided from the expression graph, not from numbers."""
+    t = ca.SX.sym("t")
+    X = ca.SX.sym("X", cm.nX)
+    p = ca.SX.sym("p", cm.p0.size)
+    fn = ca.Function("f", [t, X, p], [cm.f_ode(t, X, ca.SX(0, 1), p)[:cm.nx]])
+    return not any(fn.instruction_id(k) in _NONSMOOTH for k in range(fn.n_instructions()))
+
+
 def auto_library(cm: CompiledModel) -> _Library | None:
     """The library ``solver="auto"`` runs, or None when it keeps to CVODES/IDAS.
 
     A model qualifies when it is an ODE (no algebraic unknowns for a DAE solver) without
-    events, with at most :data:`AUTO_STATES` states and generated C of at most
+    events and with a smooth right-hand side (:func:`smooth_rhs`: a kink without an
+    event, such as a trapezoidal back EMF written with ``if_else``, is left to CVODES),
+    with at most :data:`AUTO_STATES` states and generated C of at most
     :data:`AUTO_SOURCE` characters, and a C compiler is found; ``MECHATRON_NATIVE=0`` in
     the environment turns this off. The decision is taken once per compiled model. A
     library that fails to build leaves the model to CVODES."""
@@ -152,7 +173,7 @@ def auto_library(cm: CompiledModel) -> _Library | None:
         return cached or None
     lib = None
     if (os.environ.get("MECHATRON_NATIVE", "1") != "0" and not cm.nz and not cm.nr
-            and 0 < cm.nx <= AUTO_STATES and compiler() is not None):
+            and 0 < cm.nx <= AUTO_STATES and compiler() is not None and smooth_rhs(cm)):
         source = _source(cm)
         if len(source) <= AUTO_SOURCE:
             try:
