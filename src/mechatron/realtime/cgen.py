@@ -95,9 +95,10 @@ def _run(cmd: list[str], cwd: Path, what: str) -> None:
 
 
 def build_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> dict[str, Path]:
-    """Generate and compile ``mt_plant`` (runner + plant) and ``mt_controller``.
+    """Generate and compile ``mt_plant`` (runner + plant), ``mt_controller`` and
+    ``mt_sil`` (plant and controller in one real-time loop).
 
-    Returns the paths of the two executables.
+    Returns the paths of the executables by role (``plant``, ``controller``, ``sil``).
     """
     cc = cc or os.environ.get("CC") or find_tool("cc") or find_tool("gcc")
     if not cc:
@@ -110,7 +111,7 @@ def build_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> dict[st
                        (ctrl_c[0], CTRL_CFLAGS), (ctrl_c[1], CTRL_CFLAGS),
                        *((s, CFLAGS + ["-Werror", "-D_GNU_SOURCE"] + inc) for s in
                          ("mt_packet.c", "mt_transport.c", "ctrl_core.c", "plant_runner.c",
-                          "controller_main.c"))):
+                          "controller_main.c", "sil_loop.c"))):
         _run([cc, *flags, "-c", src, "-o", Path(src).stem + ".o"], out, src)
     plant = out / "mt_plant"
     ctrl = out / "mt_controller"
@@ -119,7 +120,11 @@ def build_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> dict[st
     _run([cc, "-o", ctrl.name, "controller_main.o", "ctrl_core.o",
           f"{CONTROLLER_NAME}.o", f"{CONTROLLER_NAME}_casadi.o", "mt_packet.o",
           "mt_transport.o", "-lm"], out, "mt_controller")
-    return {"plant": plant, "controller": ctrl}
+    sil = out / "mt_sil"
+    _run([cc, "-o", sil.name, "sil_loop.o", "ctrl_core.o", "plant_model.o",
+          f"{CONTROLLER_NAME}.o", f"{CONTROLLER_NAME}_casadi.o", "mt_packet.o",
+          "mt_transport.o", "-lm"], out, "mt_sil")
+    return {"plant": plant, "controller": ctrl, "sil": sil}
 
 
 def build_firmware(loop: LoopFunctions, out: Path, cc: str | None = None) -> Path:
