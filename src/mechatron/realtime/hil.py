@@ -117,7 +117,7 @@ class HILResult:
             "timing": {k: v for k, v in self.timing.items() if v is not None},
             "realtime_scheduling": bool(r.get("realtime", False)),
             "mlockall": bool(r.get("mlockall", r.get("realtime", False))),
-            "cpu": r.get("cpu", -1),
+            "cpu": r.get("cpu", -1), "keep_awake": bool(r.get("keep_awake", False)),
             "realtime_factor": self.timing["realtime_factor"],
             "over_budget": self.over_budget,
             "notes": list(self.notes),
@@ -223,7 +223,8 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
             realtime: bool = True, wait: float = 0.8, seed: int = 1,
             build_dir: str | os.PathLike | None = None, pil_timeout: float = 2.0,
             lockstep: bool = False, cpu: int | None | str = "auto",
-            spin: float | str = "auto", max_overruns: float | None = None) -> HILResult:
+            spin: float | str = "auto", max_overruns: float | None = None,
+            keep_awake: bool = True) -> HILResult:
     """Run one HIL experiment and compare it with MIL.
 
     Parameters
@@ -252,6 +253,10 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
     spin : float or "auto"
         ``sim`` only: seconds before each deadline spent polling the clock instead of
         sleeping (``"auto"``: :func:`default_spin`; 0: sleep to the deadline).
+    keep_awake : bool
+        ``sim`` with a pinned CPU: run a ``SCHED_IDLE`` process spinning on the loop's
+        CPU, so that a virtual CPU does not halt between periods (waking a halted one
+        costs the host's scheduling delay); it takes only time no other task wants.
     max_overruns : float, optional
         Overrun budget, a fraction of the steps (``1e-3``: 0.1 %). When exceeded an
         :class:`OverrunWarning` is issued, a note added and ``over_budget`` set (the
@@ -303,7 +308,7 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
     try:
         if transport == "sim":
             res = _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
-                           max_overruns)
+                           max_overruns, keep_awake)
         else:
             res = _run(loop, name, mode, duration, rate, loss, transport, realtime, wait,
                        seed, out, steps, pil_timeout, lockstep or mode == "pil")
@@ -321,7 +326,7 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
 
 
 def _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
-             max_overruns) -> HILResult:
+             max_overruns, keep_awake) -> HILResult:
     """SIL in one process: ``mt_sil`` runs the generated plant and controller."""
     exes = build_host(loop, out)
     log_path, stats_path = out / "log.bin", out / "stats.json"
@@ -331,7 +336,7 @@ def _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
     if realtime:
         cmd.append("--rt")
     if cpu is not None:
-        cmd += ["--cpu", str(int(cpu))]
+        cmd += ["--cpu", str(int(cpu))] + (["--keep-awake"] if keep_awake else [])
     if max_overruns is not None:
         cmd += ["--max-overruns", repr(float(max_overruns))]
     budget = 60.0 + 2.0 * steps / rate

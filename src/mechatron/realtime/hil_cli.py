@@ -57,6 +57,9 @@ def add_hil_command(sub) -> None:
     p.add_argument("--spin", type=float, metavar="S",
                    help="sim: poll the clock for the last S s before each deadline "
                         "(default: half the period, at most 50 us; 0: sleep only)")
+    p.add_argument("--no-keep-awake", action="store_true",
+                   help="sim: do not run the idle-priority spinner that keeps the loop's "
+                        "CPU from halting between periods")
     p.add_argument("--no-rt", action="store_true",
                    help="do not ask for real-time scheduling (SCHED_FIFO, mlockall, "
                         "CPU pinning)")
@@ -94,6 +97,7 @@ def cmd_hil(args: argparse.Namespace) -> int:
         kw["cpu"] = args.cpu
     if args.spin is not None:
         kw["spin"] = args.spin
+    kw["keep_awake"] = not args.no_keep_awake
     with warnings.catch_warnings():          # said once below, as a warning line
         warnings.simplefilter("ignore", OverrunWarning)
         res = run_hil(args.name, mode=args.mode, duration=args.duration,

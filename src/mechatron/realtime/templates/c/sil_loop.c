@@ -22,7 +22,11 @@
  * --spin S sleeps until S seconds before each deadline and polls the clock for the rest
  * (the sleep's wake-up latency, tens of us in a virtual machine, is then hidden).
  *
+ * --keep-awake (with --cpu) runs a SCHED_IDLE child spinning on the same CPU, so that a
+ * virtual CPU never halts between periods: it takes only time nobody else wants.
+ *
  * Usage: mt_sil --rate HZ --steps N [--loss P] [--seed N] [--rt] [--cpu N] [--spin S]
+ *        [--keep-awake]
  *        [--max-overruns F] [--log FILE] [--stats FILE]
  */
 #include <errno.h>
@@ -33,7 +37,9 @@
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "ctrl_core.h"
 #include "mt_casadi.h"
@@ -63,19 +69,44 @@ typedef struct {
     int cpu;
     double max_overruns;       /* < 0: no budget */
     double spin;               /* s before each deadline spent polling the clock */
+    int awake;                 /* keep the loop's CPU from idling (a SCHED_IDLE spinner) */
     const char *log;
     const char *stats;
 } options;
+
+/* A child pinned to the loop's CPU in SCHED_IDLE that spins: it runs only when nothing
+ * else wants that CPU, and keeps a virtual CPU from halting between periods (waking a
+ * halted virtual CPU costs the host's scheduling delay, up to milliseconds). Returns its
+ * pid, or -1 (errno set). */
+static pid_t start_spinner(int cpu)
+{
+    pid_t pid = fork();
+    if (pid == 0) {
+        struct sched_param sp;
+        cpu_set_t set;
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        CPU_ZERO(&set);
+        CPU_SET(cpu, &set);
+        sp.sched_priority = 0;
+        if (sched_setaffinity(0, sizeof set, &set) != 0
+            || sched_setscheduler(0, SCHED_IDLE, &sp) != 0)
+            _exit(1);
+        for (;;) {
+        }
+    }
+    return pid;
+}
 
 static int parse(int argc, char **argv, options *o)
 {
     int i;
     o->rate = 10000.0; o->steps = 0; o->loss = 0.0; o->seed = 1; o->rt = 0; o->cpu = -1;
-    o->max_overruns = -1.0; o->spin = 0.0; o->log = NULL; o->stats = NULL;
+    o->max_overruns = -1.0; o->spin = 0.0; o->awake = 0; o->log = NULL; o->stats = NULL;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = (i + 1 < argc) ? argv[i + 1] : NULL;
         if (!strcmp(a, "--rt")) { o->rt = 1; continue; }
+        if (!strcmp(a, "--keep-awake")) { o->awake = 1; continue; }
         if (!v) { fprintf(stderr, "mt_sil: %s needs a value\n", a); return -1; }
         if (!strcmp(a, "--rate")) o->rate = atof(v);
         else if (!strcmp(a, "--steps")) o->steps = atol(v);
@@ -115,7 +146,8 @@ int main(int argc, char **argv)
     struct timespec start, deadline;
     int64_t period_ns, spin_ns;
     int nx, i, fifo_ok = 0, lock_ok = 0, cpu_ok = 0, over_budget = 0;
-    const char *fifo_err = NULL, *lock_err = NULL, *cpu_err = NULL;
+    const char *fifo_err = NULL, *lock_err = NULL, *cpu_err = NULL, *awake_err = NULL;
+    pid_t spinner = -1;
     struct sigaction sa;
     double t_wall0, t_wall, period;
 
@@ -134,6 +166,10 @@ int main(int argc, char **argv)
     sigaction(SIGTERM, &sa, NULL);
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);     /* 1 ns timer slack instead of 50 us */
 
+    if (o.awake && o.cpu >= 0) {
+        spinner = start_spinner(o.cpu);
+        if (spinner < 0) awake_err = strerror(errno);
+    }
     if (o.cpu >= 0) {
         cpu_set_t set;
         CPU_ZERO(&set);
@@ -234,6 +270,10 @@ int main(int argc, char **argv)
         done++;
     }
     t_wall = mt_now() - t_wall0;
+    if (spinner > 0) {
+        kill(spinner, SIGKILL);
+        waitpid(spinner, NULL, 0);
+    }
     if (o.max_overruns >= 0 && (double)overruns > o.max_overruns * (double)(done ? done : 1))
         over_budget = 1;
     if (o.log) {
@@ -256,9 +296,9 @@ int main(int argc, char **argv)
                 dropped_plant + dropped_ctrl + skipped, skipped);
         fprintf(f, " \"dropped_on_purpose\": %ld, \"bad_frames\": 0,\n", dropped_plant);
         fprintf(f, " \"wall_time_s\": %.9g, \"realtime\": %s, \"mlockall\": %s, "
-                   "\"cpu\": %d, \"lockstep\": false,\n",
+                   "\"cpu\": %d, \"keep_awake\": %s, \"lockstep\": false,\n",
                 t_wall, fifo_ok ? "true" : "false", lock_ok ? "true" : "false",
-                cpu_ok ? o.cpu : -1);
+                cpu_ok ? o.cpu : -1, spinner > 0 ? "true" : "false");
         fprintf(f, " \"overrun_budget\": %.9g, \"over_budget\": %s,\n",
                 o.max_overruns, over_budget ? "true" : "false");
         fprintf(f, " \"controller\": {\"samples\": %u, \"lost_samples\": %u, "
@@ -270,6 +310,9 @@ int main(int argc, char **argv)
         if (o.rt && !fifo_ok) json_note(f, &first, "SCHED_FIFO refused", fifo_err);
         if (o.rt && !lock_ok) json_note(f, &first, "mlockall refused", lock_err);
         if (o.cpu >= 0 && !cpu_ok) json_note(f, &first, "CPU pinning refused", cpu_err);
+        if (o.awake && o.cpu < 0)
+            json_note(f, &first, "keep-awake needs a pinned CPU (--cpu)", NULL);
+        if (o.awake && awake_err) json_note(f, &first, "keep-awake refused", awake_err);
         fprintf(f, "],\n");
         fprintf(f, " \"interrupted\": %s, \"columns\": [", g_stop ? "true" : "false");
         for (i = 0; i < NCOL; ++i) fprintf(f, "%s\"%s\"", i ? ", " : "", COLS[i]);
