@@ -52,6 +52,8 @@ def test_one_loop_equals_mil_up_to_the_first_lost_sample(name, var):
     assert tm["jitter_median_s"] <= tm["jitter_p99_s"] <= tm["jitter_max_s"]
     assert s["lost_samples"] == s["missed_steps"] == int((~got).sum())
     assert s["overrun_percent"] == pytest.approx(100 * s["overruns"] / 3000)
+    if s["cpu"] >= 0:                  # pinned: the idle-priority spinner ran beside it
+        assert s["keep_awake"] is True
 
 
 def test_injected_loss_is_counted_once_and_filled_in_by_the_controller():
