@@ -262,12 +262,25 @@ def _rows_codegen(r: dict) -> list[dict]:
 def _rows_realtime(r: dict) -> list[dict]:
     if "skipped" in r:
         return []
-    ol = r["open_loop_10khz"]
-    return [_row("realtime runner 10 kHz, median step", "s", ol["median_step_time_s"]),
-            _row("realtime runner 10 kHz, overruns", "", ol["overruns"], goal="0",
-                 met=ol["overruns"] == 0),
-            _row("SIL over UDP 10 kHz, overruns", "", r["sil_udp_10khz"]["overruns"],
-                 goal="0", met=r["sil_udp_10khz"]["overruns"] == 0)]
+    goal = r["goal_overrun_percent"]
+    rows = []
+    for rate, row in r["sil"].items():
+        for cond in ("idle", "load"):
+            x = row[cond]
+            is_goal = rate == "10khz" and cond == "idle"
+            rows.append(_row(f"SIL loop {rate}, {cond}: overruns", "%",
+                             x["overrun_percent"],
+                             goal=f"< {goal:g} %" if is_goal else None,
+                             met=x["overrun_percent"] < goal if is_goal else None))
+            rows.append(_row(f"SIL loop {rate}, {cond}: period jitter p99", "s",
+                             x["period_jitter_p99_s"]))
+    udp = r.get("sil_udp_10khz")
+    if udp:
+        ten = r["sil"]["10khz"]["idle"]["overrun_percent"]
+        rows.append(_row("SIL loop 10khz idle vs two processes over UDP: overruns", "%",
+                         ten, "SIL over UDP", udp["overrun_percent"],
+                         udp["overrun_percent"] / ten if ten > 0 else None))
+    return rows
 
 
 def _rows_multibody(r: dict) -> list[dict]:

@@ -34,7 +34,8 @@ from mechatron.realtime.controller import CONTROLLER_SOLVER
 from mechatron.realtime.loop import CONTROLLER_NAME, LoopFunctions
 
 __all__ = ["C_DIR", "FIRMWARE_DIR", "generate_sources", "generate_controller",
-           "build_host", "build_firmware", "find_tool", "CTRL_DIR"]
+           "build_host", "build_firmware", "build_reference_firmware",
+           "build_firmware_host", "find_tool", "CTRL_DIR"]
 
 C_DIR = Path(str(resources.files("mechatron.realtime") / "templates" / "c"))
 FIRMWARE_DIR = Path(str(resources.files("mechatron.realtime") / "templates" / "firmware"))
@@ -95,9 +96,10 @@ def _run(cmd: list[str], cwd: Path, what: str) -> None:
 
 
 def build_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> dict[str, Path]:
-    """Generate and compile ``mt_plant`` (runner + plant) and ``mt_controller``.
+    """Generate and compile ``mt_plant`` (runner + plant), ``mt_controller`` and
+    ``mt_sil`` (plant and controller in one real-time loop).
 
-    Returns the paths of the two executables.
+    Returns the paths of the executables by role (``plant``, ``controller``, ``sil``).
     """
     cc = cc or os.environ.get("CC") or find_tool("cc") or find_tool("gcc")
     if not cc:
@@ -110,7 +112,7 @@ def build_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> dict[st
                        (ctrl_c[0], CTRL_CFLAGS), (ctrl_c[1], CTRL_CFLAGS),
                        *((s, CFLAGS + ["-Werror", "-D_GNU_SOURCE"] + inc) for s in
                          ("mt_packet.c", "mt_transport.c", "ctrl_core.c", "plant_runner.c",
-                          "controller_main.c"))):
+                          "controller_main.c", "sil_loop.c"))):
         _run([cc, *flags, "-c", src, "-o", Path(src).stem + ".o"], out, src)
     plant = out / "mt_plant"
     ctrl = out / "mt_controller"
@@ -119,7 +121,11 @@ def build_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> dict[st
     _run([cc, "-o", ctrl.name, "controller_main.o", "ctrl_core.o",
           f"{CONTROLLER_NAME}.o", f"{CONTROLLER_NAME}_casadi.o", "mt_packet.o",
           "mt_transport.o", "-lm"], out, "mt_controller")
-    return {"plant": plant, "controller": ctrl}
+    sil = out / "mt_sil"
+    _run([cc, "-o", sil.name, "sil_loop.o", "ctrl_core.o", "plant_model.o",
+          f"{CONTROLLER_NAME}.o", f"{CONTROLLER_NAME}_casadi.o", "mt_packet.o",
+          "mt_transport.o", "-lm"], out, "mt_sil")
+    return {"plant": plant, "controller": ctrl, "sil": sil}
 
 
 def build_firmware(loop: LoopFunctions, out: Path, cc: str | None = None) -> Path:
@@ -149,6 +155,79 @@ def build_firmware(loop: LoopFunctions, out: Path, cc: str | None = None) -> Pat
         _run([cc, *arch, *flags, "-c", src, "-o", obj], out, f"firmware {src}")
         objs.append(obj)
     elf = out / "mt_firmware.elf"
+    _run([cc, *arch, "-nostartfiles", "-T", "lm3s6965.ld", "--specs=nano.specs",
+          "--specs=nosys.specs", "-Wl,--gc-sections", "-o", elf.name, *objs, "-lm"],
+         out, "firmware link")
+    return elf
+
+
+def _copy_firmware(loop: LoopFunctions, out: Path) -> Path:
+    out = generate_sources(loop, out)
+    for src in FIRMWARE_DIR.iterdir():
+        shutil.copy(src, out / src.name)
+    return out
+
+
+def build_firmware_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> Path:
+    """Compile the reference firmware's core (``mt_fw.c``, ``ctrl_core.c``,
+    ``mt_packet.c``, the generated controller) for this machine with its host board layer
+    (``fw_host.c``: a tty and ``clock_nanosleep`` as the timer): ``mt_fw_host``, the
+    firmware's protocol code as the microcontroller runs it, for tests over a
+    pseudo-terminal."""
+    cc = cc or os.environ.get("CC") or find_tool("cc") or find_tool("gcc")
+    if not cc:
+        raise SimulationError("hil: no C compiler found (looked for $CC, cc, gcc). Install "
+                              "gcc (apt-get install gcc) or set CC.")
+    out = _copy_firmware(loop, out)
+    strict = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror"]
+    objs = []
+    for src, flags in ((f"{CTRL_DIR}/{CONTROLLER_NAME}.c", CTRL_CFLAGS),
+                       (f"{CTRL_DIR}/{CONTROLLER_NAME}_casadi.c", CTRL_CFLAGS),
+                       ("ctrl_core.c", strict + ["-I", CTRL_DIR]), ("mt_packet.c", strict),
+                       ("mt_fw.c", strict + ["-I", CTRL_DIR]),
+                       ("fw_host.c", strict + ["-D_GNU_SOURCE", "-I", CTRL_DIR])):
+        obj = "fwh_" + Path(src).stem + ".o"
+        _run([cc, *flags, "-c", src, "-o", obj], out, f"host firmware {src}")
+        objs.append(obj)
+    exe = out / "mt_fw_host"
+    _run([cc, "-o", exe.name, *objs, "-lm"], out, "mt_fw_host")
+    return exe
+
+
+def build_reference_firmware(loop: LoopFunctions, out: Path, cc: str | None = None, *,
+                             rate: float | None = None, cpu_hz: int = 12_000_000,
+                             local: bool = False) -> Path:
+    """Cross-compile the reference firmware (``mt_fw.c`` with the fixed-rate SysTick
+    loop of ``fw_timer.c``) for the LM3S6965 (Cortex-M3) with ``arm-none-eabi-gcc``.
+
+    ``rate`` is the timer's rate in Hz (default: the loop's, ``1 / dt``); ``local``
+    builds the wired variant (the controller on the board's own encoder and PWM).
+    Returns the ELF file; its size is reported by ``arm-none-eabi-size``.
+    """
+    cc = cc or find_tool("arm-none-eabi-gcc")
+    if not cc:
+        raise SimulationError("hil firmware: arm-none-eabi-gcc not found. Install it "
+                              "(apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi).")
+    out = _copy_firmware(loop, out)
+    rate = int(round(rate if rate is not None else 1.0 / loop.dt))
+    arch = ["-mcpu=cortex-m3", "-mthumb", "-O2", "-std=c99", "-ffunction-sections",
+            "-fdata-sections"]
+    strict = ["-Wall", "-Wextra", "-Werror"]
+    defs = [f"-DMT_FW_RATE={rate}u", f"-DMT_FW_CPU_HZ={int(cpu_hz)}u"] + (
+        ["-DMT_FW_LOCAL"] if local else [])
+    objs = []
+    for src, flags in ((f"{CTRL_DIR}/{CONTROLLER_NAME}.c",
+                        strict + ["-pedantic", "-ffp-contract=off"]),
+                       (f"{CTRL_DIR}/{CONTROLLER_NAME}_casadi.c",
+                        strict + ["-pedantic", "-ffp-contract=off"]),
+                       ("ctrl_core.c", strict + ["-I", CTRL_DIR]), ("mt_packet.c", strict),
+                       ("mt_fw.c", strict + ["-I", CTRL_DIR]),
+                       ("fw_timer.c", strict + defs + ["-I", CTRL_DIR]),
+                       ("startup_lm3s6965.c", strict)):
+        obj = "fwt_" + Path(src).stem + ".o"
+        _run([cc, *arch, *flags, "-c", src, "-o", obj], out, f"firmware {src}")
+        objs.append(obj)
+    elf = out / ("mt_fw_local.elf" if local else "mt_fw_timer.elf")
     _run([cc, *arch, "-nostartfiles", "-T", "lm3s6965.ld", "--specs=nano.specs",
           "--specs=nosys.specs", "-Wl,--gc-sections", "-o", elf.name, *objs, "-lm"],
          out, "firmware link")

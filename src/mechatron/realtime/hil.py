@@ -1,9 +1,15 @@
 """SIL and PIL runs of the HIL experiments, and their comparison with MIL.
 
-:func:`run_hil` builds the plant and controller C (:mod:`mechatron.realtime.cgen`), starts
-the plant runner (``mt_plant``) and the controller (a host process ``mt_controller`` for
-SIL, the firmware in QEMU for PIL) as separate processes connected by the bridge, waits
-for them, reads the runner's per-step log and statistics, runs the same loop as MIL
+:func:`run_hil` builds the plant and controller C (:mod:`mechatron.realtime.cgen`) and
+runs them:
+
+- SIL over ``transport="sim"`` (the default): plant and controller in one real-time C
+  loop, ``mt_sil`` (no link at all, so nothing but the schedule limits the rate);
+- SIL over ``"udp"`` or ``"pty"``: the plant runner ``mt_plant`` and the controller
+  ``mt_controller`` as two processes connected by the bridge;
+- PIL: ``mt_plant`` and the controller firmware in QEMU, over its emulated UART.
+
+It reads the per-step log and statistics, runs the same loop as MIL
 (:func:`mechatron.realtime.loop.run_mil`) and compares the two.
 """
 
@@ -16,6 +22,7 @@ import select
 import signal
 import subprocess
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,12 +33,37 @@ from mechatron.realtime.cgen import build_firmware, build_host, find_tool
 from mechatron.realtime.loop import EXPERIMENTS, LoopFunctions, build_loop, run_mil
 
 __all__ = ["HILResult", "run_hil", "compare", "timing_stats", "QEMU_MACHINE",
-           "qemu_available"]
+           "qemu_available", "TRANSPORTS", "OverrunWarning", "default_cpu", "default_spin"]
 
 RUNNER_COLUMNS = ("t", "duty", "ref", "count", "w", "phi", "v_c", "i", "got",
                   "wake_late_s", "exec_s", "busy_s", "rtt_s")
 QEMU_MACHINE = "lm3s6965evb"
 MAX_STEPS = 20_000_000
+#: SIL links: ``sim`` (plant and controller in one C loop), ``udp``, ``pty``.
+TRANSPORTS = ("sim", "udp", "pty")
+#: Exit code of ``mt_sil`` (and of ``mechatron hil``) when the overrun budget is exceeded.
+EXIT_OVER_BUDGET = 3
+
+
+class OverrunWarning(RuntimeWarning):
+    """A real-time run overran its period more often than its budget allows."""
+
+
+def default_cpu() -> int | None:
+    """The CPU the real-time loop is pinned to: the last one this process may use (the
+    first CPU takes most device interrupts), or None on a single CPU."""
+    try:
+        cpus = sorted(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return None
+    return cpus[-1] if len(cpus) > 1 else None
+
+
+def default_spin(rate: float) -> float:
+    """Seconds before each deadline the loop polls the clock instead of sleeping: half
+    the period, at most 50 us (a sleep's wake-up latency in a virtual machine is
+    10-30 us; polling hides it at the price of that share of one CPU)."""
+    return min(0.5 / rate, 50e-6)
 
 
 @dataclass
@@ -50,50 +82,85 @@ class HILResult:
     comparison: dict
     timing: dict
     notes: list[str] = field(default_factory=list)
+    transport: str = "udp"
+    max_overruns: float | None = None
+
+    @property
+    def over_budget(self) -> bool:
+        """True when the share of overrun steps exceeds :attr:`max_overruns`."""
+        if self.max_overruns is None:
+            return False
+        return self.runner["overruns"] > self.max_overruns * max(self.runner["steps"], 1)
 
     def summary(self) -> dict:
-        """The JSON summary of ``mechatron hil --json``."""
+        """The JSON summary of ``mechatron hil --json`` (every figure a number, a bool or
+        a string: a figure that was not measured is left out, never null)."""
         r = self.runner
-        return {
-            "name": self.name, "mode": self.mode, "rate_hz": self.rate,
-            "duration_s": self.duration, "loss": self.loss,
+        steps = max(r["steps"], 1)
+        out = {
+            "name": self.name, "mode": self.mode, "transport": self.transport,
+            "rate_hz": self.rate, "duration_s": self.duration, "loss": self.loss,
             "steps": r["steps"], "requested_steps": r["requested_steps"],
-            "overruns": r["overruns"], "missed_steps": r["missed_steps"],
-            "lost_packets": r["lost_packets"], "late_packets": r["late_packets"],
-            "dropped_on_purpose": {"plant": r["dropped_on_purpose"],
-                                   "controller": self.controller.get("dropped_on_purpose")},
-            "controller_lost_samples": self.controller.get("lost_samples"),
+            "overruns": r["overruns"], "overrun_percent": 100.0 * r["overruns"] / steps,
+            "missed_steps": r["missed_steps"],
+            "lost_samples": r["lost_packets"], "lost_packets": r["lost_packets"],
+            "late_packets": r["late_packets"],
+            "dropped_on_purpose": {"plant": r.get("dropped_on_purpose", 0),
+                                   "controller": self.controller.get("dropped_on_purpose",
+                                                                     0)},
+            "controller_lost_samples": self.controller.get("lost_samples", 0),
             "rms_diff_percent": self.comparison["rms_diff_percent"],
             "peak_diff_percent": self.comparison["peak_diff_percent"],
             "compared": self.comparison["variable"],
-            "max_step_time_s": r["max_step_time_s"],
-            "median_step_time_s": r["median_step_time_s"],
-            "timing": self.timing, "realtime_scheduling": r["realtime"],
+            "max_step_time_s": self.timing["step_time_max_s"],
+            "median_step_time_s": self.timing["step_time_median_s"],
+            "timing": {k: v for k, v in self.timing.items() if v is not None},
+            "realtime_scheduling": bool(r.get("realtime", False)),
+            "mlockall": bool(r.get("mlockall", r.get("realtime", False))),
+            "cpu": r.get("cpu", -1), "keep_awake": bool(r.get("keep_awake", False)),
             "realtime_factor": self.timing["realtime_factor"],
+            "over_budget": self.over_budget,
             "notes": list(self.notes),
         }
+        if self.max_overruns is not None:
+            out["overrun_budget_percent"] = 100.0 * self.max_overruns
+        return out
 
 
-def timing_stats(log: dict[str, np.ndarray], rate: float, wall_time: float) -> dict:
-    """Median, 99th percentile and worst step time, wake-up jitter and round trip."""
+def timing_stats(log: dict[str, np.ndarray], rate: float, wall_time: float, *,
+                 scheduled: bool = True) -> dict:
+    """Step time, wake-up jitter, period jitter and round trip, as percentiles.
+
+    ``jitter_*`` is the wake-up lateness against the absolute deadline ``t_k``;
+    ``period_jitter_*`` the deviation of the time between two wake-ups from the period,
+    ``|(t_wake,k+1 - t_wake,k) - T|``. Without a schedule (``scheduled=False``: lockstep)
+    neither has a meaning and both are left out, as is the round trip when no reply was
+    timed.
+    """
     def q(a, p):
         a = a[np.isfinite(a)]
-        return float(np.percentile(a, p)) if a.size else None
+        return float(np.percentile(a, p)) if a.size else 0.0
 
     rtt = log["rtt_s"][log["rtt_s"] >= 0]
     n = log["t"].size
-    return {
+    out = {
         "step_time_median_s": q(log["exec_s"], 50),
         "step_time_p99_s": q(log["exec_s"], 99),
         "step_time_max_s": q(log["exec_s"], 100),
-        "jitter_median_s": q(log["wake_late_s"], 50),
-        "jitter_p99_s": q(log["wake_late_s"], 99),
-        "jitter_max_s": q(log["wake_late_s"], 100),
         "busy_max_s": q(log["busy_s"], 100),
-        "round_trip_median_s": q(rtt, 50) if rtt.size else None,
-        "round_trip_max_s": q(rtt, 100) if rtt.size else None,
-        "realtime_factor": (n / rate) / wall_time if wall_time > 0 else None,
+        "realtime_factor": (n / rate) / wall_time if wall_time > 0 else 0.0,
     }
+    if scheduled:
+        late = log["wake_late_s"]
+        period = np.abs(np.diff(late))      # t_wake,k+1 - t_wake,k - T, as |.|
+        for name, p in (("median", 50), ("p90", 90), ("p99", 99), ("p999", 99.9),
+                        ("max", 100)):
+            out[f"jitter_{name}_s"] = q(late, p)
+            out[f"period_jitter_{name}_s"] = q(period, p)
+    if rtt.size:
+        out.update(round_trip_median_s=q(rtt, 50), round_trip_p99_s=q(rtt, 99),
+                   round_trip_max_s=q(rtt, 100))
+    return out
 
 
 def compare(log: dict[str, np.ndarray], mil: dict[str, np.ndarray], loop: LoopFunctions
@@ -152,10 +219,12 @@ def _read_log(path: Path) -> dict[str, np.ndarray]:
 
 
 def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
-            rate: float = 10_000.0, loss: float = 0.0, transport: str = "udp",
+            rate: float = 10_000.0, loss: float = 0.0, transport: str = "sim",
             realtime: bool = True, wait: float = 0.8, seed: int = 1,
             build_dir: str | os.PathLike | None = None, pil_timeout: float = 2.0,
-            lockstep: bool = False) -> HILResult:
+            lockstep: bool = False, cpu: int | None | str = "auto",
+            spin: float | str = "auto", max_overruns: float | None = None,
+            keep_awake: bool = True) -> HILResult:
     """Run one HIL experiment and compare it with MIL.
 
     Parameters
@@ -171,10 +240,27 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
     loss : float
         Probability, in [0, 1), that each sample and each command is dropped on purpose.
     transport : str
-        SIL bridge: ``"udp"`` (loopback) or ``"pty"`` (pseudo-terminal serial line). PIL
-        always uses the emulated UART (a pseudo-terminal on the host side).
+        SIL link: ``"sim"`` (plant and controller in one real-time C loop, ``mt_sil``),
+        ``"udp"`` (two processes over loopback) or ``"pty"`` (two processes over a
+        pseudo-terminal serial line). PIL always uses the emulated UART (a
+        pseudo-terminal on the host side).
     realtime : bool
-        Ask for SCHED_FIFO (granted only with the privilege; reported either way).
+        Ask for SCHED_FIFO and mlockall (granted only with the privilege; a note says
+        when refused).
+    cpu : int, None or "auto"
+        ``sim`` only: the CPU the loop is pinned to (``"auto"``: :func:`default_cpu`;
+        None: not pinned).
+    spin : float or "auto"
+        ``sim`` only: seconds before each deadline spent polling the clock instead of
+        sleeping (``"auto"``: :func:`default_spin`; 0: sleep to the deadline).
+    keep_awake : bool
+        ``sim`` with a pinned CPU: run a ``SCHED_IDLE`` process spinning on the loop's
+        CPU, so that a virtual CPU does not halt between periods (waking a halted one
+        costs the host's scheduling delay); it takes only time no other task wants.
+    max_overruns : float, optional
+        Overrun budget, a fraction of the steps (``1e-3``: 0.1 %). When exceeded an
+        :class:`OverrunWarning` is issued, a note added and ``over_budget`` set (the
+        command line then exits with 3).
     wait : float
         Fraction of the period the plant waits for a reply before holding the previous
         duty (SIL). PIL waits up to ``pil_timeout`` s per step instead (lockstep: QEMU
@@ -195,8 +281,16 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
         raise SimulationError(f"hil: --rate must be in (0, 100000] Hz, got {rate!r}.")
     if not (0.0 <= loss < 1.0):
         raise SimulationError(f"hil: --loss is a probability in [0, 1), got {loss!r}.")
-    if transport not in ("udp", "pty"):
-        raise SimulationError(f"hil: transport must be 'udp' or 'pty', got {transport!r}.")
+    if transport not in TRANSPORTS:
+        raise SimulationError(f"hil: transport must be one of {', '.join(TRANSPORTS)}, got "
+                              f"{transport!r}.")
+    if transport == "sim" and (mode == "pil" or lockstep):
+        transport = "udp" if mode == "sil" else "pty"   # one loop has nothing to wait for
+    if max_overruns is not None and not (0 <= max_overruns <= 1):
+        raise SimulationError(f"hil: --max-overruns is a fraction of the steps in [0, 1], "
+                              f"got {max_overruns!r}.")
+    cpu = default_cpu() if cpu == "auto" else cpu
+    spin = default_spin(rate) if spin == "auto" else float(spin)
     steps = int(round(duration * rate))
     if steps < 1 or steps > MAX_STEPS:
         raise SimulationError(f"hil: duration x rate = {steps} steps; give between 1 and "
@@ -212,11 +306,66 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
         build_dir = tmp.name
     out = Path(build_dir)
     try:
-        return _run(loop, name, mode, duration, rate, loss, transport, realtime, wait,
-                    seed, out, steps, pil_timeout, lockstep or mode == "pil")
+        if transport == "sim":
+            res = _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
+                           max_overruns, keep_awake)
+        else:
+            res = _run(loop, name, mode, duration, rate, loss, transport, realtime, wait,
+                       seed, out, steps, pil_timeout, lockstep or mode == "pil")
     finally:
         if tmp is not None:
             tmp.cleanup()
+    res.max_overruns = max_overruns
+    if res.over_budget:
+        msg = (f"hil {name}: {res.runner['overruns']} overruns in {res.runner['steps']} "
+               f"steps ({100 * res.runner['overruns'] / res.runner['steps']:.3g} %) exceed "
+               f"the budget of {100 * max_overruns:.3g} %")
+        res.notes.append(msg)
+        warnings.warn(msg + ".", OverrunWarning, stacklevel=2)
+    return res
+
+
+def _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
+             max_overruns, keep_awake) -> HILResult:
+    """SIL in one process: ``mt_sil`` runs the generated plant and controller."""
+    exes = build_host(loop, out)
+    log_path, stats_path = out / "log.bin", out / "stats.json"
+    cmd = [str(exes["sil"]), "--rate", repr(float(rate)), "--steps", str(steps),
+           "--loss", repr(float(loss)), "--seed", str(seed), "--spin", repr(float(spin)),
+           "--log", str(log_path), "--stats", str(stats_path)]
+    if realtime:
+        cmd.append("--rt")
+    if cpu is not None:
+        cmd += ["--cpu", str(int(cpu))] + (["--keep-awake"] if keep_awake else [])
+    if max_overruns is not None:
+        cmd += ["--max-overruns", repr(float(max_overruns))]
+    budget = 60.0 + 2.0 * steps / rate
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=budget)
+    except subprocess.TimeoutExpired:
+        raise SimulationError(f"hil: the SIL loop did not finish within {budget:g} s; "
+                              "stopped it.") from None
+    if proc.returncode not in (0, EXIT_OVER_BUDGET):
+        raise SimulationError(f"hil: the SIL loop failed (exit {proc.returncode}): "
+                              f"{proc.stderr.strip()[:1000]}")
+    runner = json.loads(stats_path.read_text())
+    controller = runner.pop("controller")
+    log = _read_log(log_path)
+    mil = run_mil(loop, steps)
+    timing = timing_stats(log, rate, runner["wall_time_s"])
+    notes = [f"{n}; ran without it" for n in runner.get("notes", [])]
+    if realtime and not runner["realtime"] and not notes:
+        notes.append("SCHED_FIFO not granted; ran in the default class")
+    if runner["steps"] < steps:
+        notes.append(f"stopped after {runner['steps']} of {steps} steps")
+    if runner.get("skipped_samples"):
+        notes.append(f"{runner['skipped_samples']} step(s) started a period late: their "
+                     "samples were not exchanged (lost) and the plant only stepped, to "
+                     "regain the schedule")
+    return HILResult(name=name, mode="sil", rate=rate, duration=steps / rate, loss=loss,
+                     log=log, mil=mil, runner=runner, controller=controller,
+                     comparison=compare(log, mil, loop), timing=timing, notes=notes,
+                     transport="sim")
 
 
 def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed, out,
@@ -280,9 +429,8 @@ def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed
         controller = _firmware_stats(qemu_log)
     log = _read_log(log_path)
     mil = run_mil(loop, steps)
-    timing = timing_stats(log, rate, runner["wall_time_s"])
-    if lockstep:      # no schedule to keep: a wake-up lateness has no meaning
-        timing.update(jitter_median_s=None, jitter_p99_s=None, jitter_max_s=None)
+    # without a schedule to keep (lockstep) a wake-up lateness has no meaning
+    timing = timing_stats(log, rate, runner["wall_time_s"], scheduled=not lockstep)
     if runner["steps"] < steps:
         notes.append(f"stopped after {runner['steps']} of {steps} steps")
     if lockstep or (timing["realtime_factor"] or 0) < 0.98:
@@ -296,7 +444,8 @@ def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed
                      "class")
     return HILResult(name=name, mode=mode, rate=rate, duration=steps / rate, loss=loss,
                      log=log, mil=mil, runner=runner, controller=controller,
-                     comparison=compare(log, mil, loop), timing=timing, notes=notes)
+                     comparison=compare(log, mil, loop), timing=timing, notes=notes,
+                     transport=transport if mode == "sil" else "uart")
 
 
 def _firmware_stats(path: Path) -> dict:

@@ -90,8 +90,10 @@ def write_report(res: HILResult, path) -> Path:
         "templates/hil_report.html").read_text()).substitute(
         title=html.escape(f"{res.name} control, {res.mode.upper()} at {res.rate:g} Hz"),
         description=html.escape(
-            f"Plant (RC filter, H-bridge, DC motor, encoder) and controller as separate "
-            f"processes ({res.mode.upper()}), {res.duration:g} s at {res.rate:g} Hz, "
+            "Plant (RC filter, H-bridge, DC motor, encoder) and controller "
+            + ("in one real-time C loop" if res.transport == "sim" else
+               f"as separate processes over {res.transport}")
+            + f" ({res.mode.upper()}), {res.duration:g} s at {res.rate:g} Hz, "
             f"packet loss injected: {res.loss:g}. MIL runs the same step functions in "
             "one process."),
         notes=notes,
@@ -102,18 +104,20 @@ def write_report(res: HILResult, path) -> Path:
                                                  c["rms_diff_percent"]),
             ("peak difference", c["peak_diff"]), ("peak difference [% of reference]",
                                                    c["peak_diff_percent"])]),
-        timing_rows=_rows([
+        timing_rows=_rows([(k, v) for k, v in [
             ("steps (requested)", f"{s['steps']} ({s['requested_steps']})"),
-            ("overruns", s["overruns"]),
+            ("overruns", f"{s['overruns']} ({s['overrun_percent']:.3g} %)"),
             ("median step time [s]", tm["step_time_median_s"]),
             ("99th percentile step time [s]", tm["step_time_p99_s"]),
             ("worst step time [s]", tm["step_time_max_s"]),
-            ("median wake-up jitter [s]", tm["jitter_median_s"]),
-            ("worst wake-up jitter [s]", tm["jitter_max_s"]),
-            ("median round trip [s]", tm["round_trip_median_s"]),
-            ("worst round trip [s]", tm["round_trip_max_s"]),
+            ("median wake-up jitter [s]", tm.get("jitter_median_s")),
+            ("99th percentile wake-up jitter [s]", tm.get("jitter_p99_s")),
+            ("worst wake-up jitter [s]", tm.get("jitter_max_s")),
+            ("99th percentile period jitter [s]", tm.get("period_jitter_p99_s")),
+            ("median round trip [s]", tm.get("round_trip_median_s")),
+            ("worst round trip [s]", tm.get("round_trip_max_s")),
             ("real-time factor", tm["realtime_factor"]),
-            ("SCHED_FIFO", s["realtime_scheduling"])]),
+            ("SCHED_FIFO", s["realtime_scheduling"])] if v is not None]),
         bridge_rows=_rows([
             ("missed steps (no reply in time)", s["missed_steps"]),
             ("late packets", s["late_packets"]), ("lost packets", s["lost_packets"]),

@@ -6,6 +6,8 @@ extern uint32_t _data_load, _data_start, _data_end, _bss_start, _bss_end, _stack
 int main(void);
 void Reset_Handler(void);
 void Default_Handler(void);
+/* The fixed-rate firmware (fw_timer.c) defines its own; the others keep the default. */
+void SysTick_Handler(void) __attribute__((weak, alias("Default_Handler")));
 
 void Default_Handler(void)
 {
@@ -28,5 +30,5 @@ __attribute__((section(".isr_vector"), used))
 void (*const vector_table[16])(void) = {
     (void (*)(void))(&_stack_top), Reset_Handler, Default_Handler, Default_Handler,
     Default_Handler, Default_Handler, Default_Handler, 0, 0, 0, 0,
-    Default_Handler, Default_Handler, 0, Default_Handler, Default_Handler,
+    Default_Handler, Default_Handler, 0, Default_Handler, SysTick_Handler,
 };
