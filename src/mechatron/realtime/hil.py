@@ -302,11 +302,11 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
             raise SimulationError(f"hil --mode pil: {why}.")
     loop = build_loop(name, rate=rate)
     tmp = None
-    if build_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="mechatron-hil-")
-        build_dir = tmp.name
-    out = Path(build_dir)
     try:
+        if build_dir is None:
+            tmp = tempfile.TemporaryDirectory(prefix="mechatron-hil-")
+            build_dir = tmp.name
+        out = Path(build_dir)
         if transport == "sim":
             res = _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
                            max_overruns, keep_awake)
