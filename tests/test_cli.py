@@ -436,3 +436,21 @@ def test_sigterm_handler_is_restored_after_the_command(capsys):
     before = signal.getsignal(signal.SIGTERM)
     assert main(["models"]) == 0
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+# ------------------------------------------------------------------------ plot labelling
+@pytest.mark.parametrize("argv", [
+    ["simulate", "dc_motor", "--plot", "{d}/sim.png"],
+    ["compare", "dc_motor", "--out", "{d}/compare.png"],
+    ["demo", "--out", "{d}/demo"],
+    ["report", "dc_motor", "--out", "{d}/report.html"],
+    ["linearize", "dc_motor", "--input", "source.V", "--output", "inertia.w", "--trim",
+     "inertia.w=100", "--free", "source.V", "--bode", "{d}/bode.png"],
+], ids=["simulate", "compare", "demo", "report", "bode"])
+def test_some_plots_lack_quantity_names_and_units(capsys, tmp_path, saved_figures, argv):
+    """Every figure a command writes labels each axis with a quantity and its unit, and
+    names each labelled curve in a legend (checked on the Figure as it is saved)."""
+    code, out, err = run(capsys, *[a.format(d=tmp_path) for a in argv])
+    assert code == 0, out + err
+    assert saved_figures, "the command saved no figure"
+    assert saved_figures.problems() == []

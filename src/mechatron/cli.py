@@ -848,7 +848,7 @@ def _demo_startup_plot(d: DemoRun) -> Path:
             err = np.abs(d.fixed.at(ref.t, path) - ref[path]) / np.max(np.abs(ref[path]))
             axis.semilogy(ref.t, np.maximum(err, 1e-17), label=label)
         axis.legend(loc="best", fontsize="small")
-    axis.set_ylabel("|RK4 - variable-step| / peak")
+    axis.set_ylabel("|RK4 - variable-step| / peak [1]")
     axis.set_xlabel("t [s]")
     axis.grid(True, alpha=0.3)
     fig.suptitle(f"{d.name}: start-up, acausal vs ODE vs fixed-step RK4")

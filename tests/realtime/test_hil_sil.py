@@ -134,3 +134,13 @@ def test_lockstep_hil_with_packet_loss_waits_no_2_s_per_lost_packet():
     # the controller filled in the samples it never got, and the loop stayed stable
     assert s["controller_lost_samples"] == s["dropped_on_purpose"]["plant"]
     assert np.all(np.abs(res.log["w"]) < 130)
+
+
+def test_some_plots_lack_quantity_names_and_units(tmp_path, capsys, saved_figures):
+    """The HIL report's traces and timing plots: each axis a quantity with its unit."""
+    code = main(["hil", "speed", "--mode", "sil", "--duration", "0.05", "--rate", "5000",
+                 "--loss", "0.01", "--json", "--report", str(tmp_path / "hil.html")])
+    capsys.readouterr()
+    assert code == 0
+    assert len(saved_figures) == 2
+    assert saved_figures.problems() == []
