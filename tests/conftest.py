@@ -1,5 +1,71 @@
 """Shared fixtures: small circuits and drives used across the test suite."""
 
 import matplotlib
+import pytest
 
 matplotlib.use("Agg")
+
+
+# ------------------------------------------------------------------ plots: labels and units
+def _labelled(label: str, categorical: bool) -> bool:
+    """A quantity and its unit, "speed [rad/s]" or "magnitude (dB)"; a categorical axis
+    (names on its ticks) needs only a name."""
+    import re
+    label = label.strip()
+    if categorical:
+        return bool(label)
+    m = re.search(r"[\[(]([^\])]+)[\])]\s*$", label) or re.search(r"[\[(]([^\])]+)[\])]",
+                                                                  label)
+    return bool(m) and bool(label[:m.start()].strip())
+
+
+def figure_label_problems(fig) -> list[str]:
+    """What a figure lacks: each axes with data needs an x and a y label with a quantity
+    and a unit (or a labelled axes sharing that axis), and each labelled line a legend
+    entry somewhere in the figure."""
+    from matplotlib.category import UnitData
+    problems = []
+    axes = [a for a in fig.axes if a.get_visible()
+            and (a.lines or a.collections or a.patches or a.images)]
+    legends = [t.get_text() for lg in fig.legends for t in lg.get_texts()]
+    for a in fig.axes:
+        if a.get_legend() is not None:
+            legends += [t.get_text() for t in a.get_legend().get_texts()]
+    for i, a in enumerate(axes):
+        for which in ("x", "y"):
+            axis = getattr(a, f"{which}axis")
+            categorical = isinstance(axis.units, UnitData)
+            shared = getattr(a, f"get_shared_{which}_axes")()
+            labels = [getattr(b, f"get_{which}label")() for b in axes
+                      if b is a or shared.joined(a, b)]
+            if not any(_labelled(t, categorical) for t in labels):
+                problems.append(f"axes {i} ({a.get_title() or fig.get_suptitle()!r}): "
+                                f"{which} label {getattr(a, f'get_{which}label')()!r} "
+                                "lacks a quantity or a unit")
+        for artist in [*a.lines, *a.collections, *a.patches]:
+            lab = artist.get_label()
+            if lab and not lab.startswith("_") and lab not in legends:
+                problems.append(f"axes {i}: '{lab}' has no legend entry")
+    return sorted(set(problems))
+
+
+class SavedFigures(list):
+    """The figures saved during a test; :meth:`problems` lists their missing labels."""
+
+    def problems(self) -> list[str]:
+        return [f"figure {k} ({f.get_suptitle()!r}): {p}" for k, f in enumerate(self)
+                for p in figure_label_problems(f)]
+
+
+@pytest.fixture
+def saved_figures(monkeypatch):
+    """Every matplotlib figure saved while the test runs (checked as saved)."""
+    from matplotlib.figure import Figure
+    figures = SavedFigures()
+    save = Figure.savefig
+
+    def recording(self, *args, **kwargs):
+        figures.append(self)
+        return save(self, *args, **kwargs)
+    monkeypatch.setattr(Figure, "savefig", recording)
+    return figures

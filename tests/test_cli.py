@@ -380,3 +380,77 @@ def test_usage_errors_are_one_line_too(capsys):
                    "see `mechatron simulate --help`.\n") or (
         err.startswith("error: mechatron simulate: argument --t-stop: invalid float value")
         and err.count("\n") == 1)
+
+
+# ---------------------------------------------------------------------------- interruption
+def _mechatron_leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if "mechatron" in p.name.lower())
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg") or __import__("shutil").which("cc") is None,
+                    reason="POSIX signals and a C compiler (cc) needed")
+@pytest.mark.parametrize("phase", ["build", "run"])
+def test_temporary_build_folders_are_left_behind_after_interrupted_runs(tmp_path, phase):
+    """SIGTERM (what `timeout` sends) during `mechatron hil`'s C build or its run: the
+    command unwinds like Ctrl-C (child processes stopped, no traceback, exit 143) and
+    leaves no mechatron folder in TMPDIR."""
+    import signal
+    import time
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    env = dict(os.environ, PYTHONPATH=str(SRC), TMPDIR=str(tmpdir))
+    env.pop("MECHATRON_DEBUG", None)
+    # a long lockstep run over UDP: a temporary build folder, two child processes
+    proc = subprocess.Popen([sys.executable, "-m", "mechatron", "hil", "speed",
+                             "--mode", "sil", "--transport", "udp", "--lockstep",
+                             "--duration", "100", "--rate", "1000"],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        # wait (polling, no timing asserted) for the phase to interrupt
+        want = "mt_plant" if phase == "run" else None
+        for _ in range(1200):
+            folders = [p for p in tmpdir.glob("mechatron-hil-*") if p.is_dir()]
+            if folders and (want is None or (folders[0] / want).exists()):
+                break
+            assert proc.poll() is None, proc.stderr.read()
+            time.sleep(0.05)
+        else:
+            pytest.fail("the hil build folder never appeared")
+        if phase == "run":
+            time.sleep(1.0)               # let the plant and the controller start
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1].startswith("error: terminated")
+    assert _mechatron_leftovers(tmpdir) == []
+
+
+def test_sigterm_handler_is_restored_after_the_command(capsys):
+    import signal
+    before = signal.getsignal(signal.SIGTERM)
+    assert main(["models"]) == 0
+    assert signal.getsignal(signal.SIGTERM) == before
+
+
+# ------------------------------------------------------------------------ plot labelling
+@pytest.mark.parametrize("argv", [
+    ["simulate", "dc_motor", "--plot", "{d}/sim.png"],
+    ["compare", "dc_motor", "--out", "{d}/compare.png"],
+    ["demo", "--out", "{d}/demo"],
+    ["report", "dc_motor", "--out", "{d}/report.html"],
+    ["linearize", "dc_motor", "--input", "source.V", "--output", "inertia.w", "--trim",
+     "inertia.w=100", "--free", "source.V", "--bode", "{d}/bode.png"],
+], ids=["simulate", "compare", "demo", "report", "bode"])
+def test_some_plots_lack_quantity_names_and_units(capsys, tmp_path, saved_figures, argv):
+    """Every figure a command writes labels each axis with a quantity and its unit, and
+    names each labelled curve in a legend (checked on the Figure as it is saved)."""
+    code, out, err = run(capsys, *[a.format(d=tmp_path) for a in argv])
+    assert code == 0, out + err
+    assert saved_figures, "the command saved no figure"
+    assert saved_figures.problems() == []

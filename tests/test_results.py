@@ -283,16 +283,30 @@ def test_plot_writes_png_and_groups_by_unit(res: SimResult, tmp_path):
     assert path.stat().st_size > 1000
     axes = fig.axes
     assert len(axes) == 2  # volts together, rad/s apart
-    assert axes[0].get_ylabel() == "[V]"
+    assert axes[0].get_ylabel() == "v [V]"          # the quantity the two share
     assert [line.get_label() for line in axes[0].get_lines()] == ["r1.p.v", "r1.n.v"]
-    assert axes[1].get_ylabel() == "[rad/s]"
+    assert axes[1].get_ylabel() == "motor.inertia.w [rad/s]"
     assert axes[1].get_xlabel() == "t [s]"
     assert fig.get_suptitle() == "dc_motor"
 
 
 def test_plot_component_prefix_and_dimensionless(res: SimResult):
     fig = res.plot("motor.inertia", "ctrl.e")
-    assert [ax.get_ylabel() for ax in fig.axes] == ["[rad/s]", "[rad]", "[1]"]
+    assert [ax.get_ylabel() for ax in fig.axes] == [
+        "motor.inertia.w [rad/s]", "motor.inertia.phi [rad]", "ctrl.e [1]"]
+
+
+def test_some_plots_lack_quantity_names_and_units_result_plot(res: SimResult, tmp_path,
+                                                              saved_figures):
+    # several quantities in one unit: named after the unit's quantity
+    from mechatron.results import axis_label
+    res.plot("r1.p.v", "r1.n.v", "r1.i", "motor.inertia.w", "motor.inertia.phi",
+             path=tmp_path / "a.png")
+    assert saved_figures.problems() == []
+    labels = [ax.get_ylabel() for ax in saved_figures[0].axes]
+    assert "v [V]" in labels and "r1.i [A]" in labels
+    assert axis_label("V", ["src.u", "r1.v"]) == "voltage [V]"
+    assert axis_label("", ["a", "b"]) == "dimensionless [1]"
 
 
 def test_plot_into_given_axes(res: SimResult):

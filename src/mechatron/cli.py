@@ -48,7 +48,9 @@ import json
 import logging
 import math
 import os
+import signal
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterable, Sequence
@@ -846,7 +848,7 @@ def _demo_startup_plot(d: DemoRun) -> Path:
             err = np.abs(d.fixed.at(ref.t, path) - ref[path]) / np.max(np.abs(ref[path]))
             axis.semilogy(ref.t, np.maximum(err, 1e-17), label=label)
         axis.legend(loc="best", fontsize="small")
-    axis.set_ylabel("|RK4 - variable-step| / peak")
+    axis.set_ylabel("|RK4 - variable-step| / peak [1]")
     axis.set_xlabel("t [s]")
     axis.grid(True, alpha=0.3)
     fig.suptitle(f"{d.name}: start-up, acausal vs ODE vs fixed-step RK4")
@@ -1215,10 +1217,38 @@ def _fail(message: str, code: int) -> int:
     return code
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, ``timeout``) during a command: unwound like Ctrl-C, so that
+    every ``finally`` runs (temporary build folders removed, child processes stopped,
+    no partial file), and the command exits with 143."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    if getattr(_on_sigterm, "fired", False):
+        return                       # a second SIGTERM (timeout also signals the group)
+    _on_sigterm.fired = True         # must not cut the cleanup short
+    raise Terminated()
+
+
+def _catch_sigterm() -> Callable[[], None]:
+    """Install :func:`_on_sigterm` for the command's run (main thread only); returns the
+    function that puts the previous handler back."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    before = signal.getsignal(signal.SIGTERM)
+    _on_sigterm.fired = False
+    signal.signal(signal.SIGTERM, _on_sigterm)
+
+    def undo() -> None:
+        signal.signal(signal.SIGTERM, before if before is not None else signal.SIG_DFL)
+    return undo
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``mechatron`` command with ``argv`` (default: ``sys.argv[1:]``).
 
-    Returns the exit code: 0 on success, 2 for bad arguments or input, 1 otherwise.
+    Returns the exit code: 0 on success, 2 for bad arguments or input, 1 otherwise;
+    130 after Ctrl-C and 143 after SIGTERM, both after the same clean-up.
     """
     parser = build_parser()
     try:
@@ -1227,8 +1257,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     undo_logging = _logging(getattr(args, "verbose", 0)
                             + getattr(args, "verbose_command", 0))
+    undo_sigterm = _catch_sigterm()
     try:
         return int(args.func(args) or EXIT_OK)
+    except Terminated:
+        print("error: terminated (SIGTERM); temporary files removed.", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("error: interrupted.", file=sys.stderr)
         return 130
@@ -1243,6 +1277,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                      f"run with MECHATRON_DEBUG=1 for the traceback and report it)",
                      EXIT_FAILURE)
     finally:
+        undo_sigterm()
         undo_logging()
 
 

@@ -645,7 +645,7 @@ class SimResult:
         for axis, (unit, group) in zip(axes, groups.items()):
             for r, y in zip(group, self._rows(group)):
                 axis.plot(self._t, y, label=self._names[r])
-            axis.set_ylabel(_unit_label(unit))
+            axis.set_ylabel(axis_label(unit, [self._names[r] for r in group]))
             axis.grid(True, alpha=0.3)
             axis.legend(loc="best", fontsize="small")
         axes[-1].set_xlabel("t [s]")
@@ -820,4 +820,30 @@ def _check_suffix(path: Path, action: str) -> str:
 
 def _unit_label(unit: str) -> str:
     return f"[{unit}]" if unit else "[1]"
+
+
+#: The quantity an axis of several variables in one unit shows (plots label every axis
+#: with a quantity and its unit).
+QUANTITIES = {"V": "voltage", "A": "current", "C": "charge", "Wb": "flux linkage",
+              "T": "flux density", "H": "inductance", "F": "capacitance",
+              "Ohm": "resistance", "W": "power", "J": "energy", "K": "temperature",
+              "N": "force", "N*m": "torque", "Pa": "pressure", "m": "position",
+              "m/s": "velocity", "m/s^2": "acceleration", "rad": "angle",
+              "rad/s": "angular velocity", "rad/s^2": "angular acceleration",
+              "kg": "mass", "s": "time", "Hz": "frequency", "m^3/s": "flow rate",
+              "": "dimensionless", "1": "dimensionless"}
+
+
+def axis_label(unit: str, names: Sequence[str]) -> str:
+    """``"quantity [unit]"`` for an axis showing ``names``, all in ``unit``: the
+    variable's name when there is one, their common last segment (``w`` of ``a.w`` and
+    ``b.w``), else the quantity the unit measures."""
+    leaves = {n.rsplit(".", 1)[-1] for n in names}
+    if len(names) == 1:
+        quantity = names[0]
+    elif len(leaves) == 1:
+        quantity = leaves.pop()
+    else:
+        quantity = QUANTITIES.get(unit, "value")
+    return f"{quantity} {_unit_label(unit)}"
 

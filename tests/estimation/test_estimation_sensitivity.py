@@ -189,3 +189,27 @@ def test_a_problem_pickles_for_worker_processes(motor_problem):
     again = pickle.loads(pickle.dumps(prob))
     assert [b["substeps"] for b in again.bound] == [b["substeps"] for b in prob.bound]
     np.testing.assert_array_equal(again.residuals(prob.initial), prob.residuals(prob.initial))
+
+
+@pytest.mark.parametrize("command,example,extra", [
+    ("sensitivity", "dc_motor_sensitivity.toml",
+     ["--method", "lhs", "--samples", "20", "--workers", "1"]),
+    ("optimize", "dc_motor_speed_pi_optimize.toml", ["--max-iterations", "3"]),
+], ids=["sensitivity", "optimize"])
+def test_some_plots_lack_quantity_names_and_units(capsys, tmp_path, saved_figures, command,
+                                                  example, extra):
+    """The scatter matrix and tornado of `sensitivity`, the response plot of `optimize`:
+    every axis a quantity with its unit (parameters and requirements in theirs), every
+    labelled curve in a legend."""
+    import shutil
+    from pathlib import Path
+    from mechatron.cli import main
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    cfg = tmp_path / example
+    shutil.copy(examples / example, cfg)
+    shutil.copy(examples / "rigs.py", tmp_path / "rigs.py")
+    code = main([command, str(cfg), *extra, "--out", str(tmp_path / "out"), "--quiet"])
+    assert code in (0, 1), capsys.readouterr().err      # 1: requirements not all met
+    capsys.readouterr()
+    assert saved_figures
+    assert saved_figures.problems() == []

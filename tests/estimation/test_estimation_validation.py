@@ -107,3 +107,15 @@ def test_validate_command_on_another_file_and_from_a_saved_fit(rig, capsys):
     assert row2["rmse"] == pytest.approx(row["rmse"], rel=1e-6)
     code = main(["validate", str(rig), "--fit", str(rig.parent / "a.csv")])
     assert code == 2 and "not the estimate.json" in capsys.readouterr().err
+
+
+def test_some_plots_lack_quantity_names_and_units(rig, capsys, saved_figures):
+    """The fit, trajectory and residual plots of `estimate` and `validate` label every
+    axis with a quantity and its unit and name their curves in legends."""
+    assert main(["estimate", str(rig), "--out", str(rig.parent / "e"), "--quiet",
+                 "--json"]) == 0
+    assert main(["validate", str(rig), "--data", str(rig.parent / "other.csv"),
+                 "--out", str(rig.parent / "v"), "--json", "--quiet"]) == 0
+    capsys.readouterr()
+    assert len(saved_figures) >= 4
+    assert saved_figures.problems() == []

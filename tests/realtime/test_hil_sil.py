@@ -107,3 +107,40 @@ def test_bad_input_is_a_clear_error(kwargs, match):
 
 def test_unknown_experiment_cli(capsys):
     assert main(["hil", "nosuch"]) == 2
+
+
+def test_lockstep_hil_with_packet_loss_waits_no_2_s_per_lost_packet():
+    """Lockstep over UDP with 5 % injected loss: a lost packet used to cost its step the
+    whole reply timeout (pil_timeout, 2 s), ~200 losses here, some 400 s. Once replies
+    have come, a step waits only a bounded multiple of their round trip; every loss is
+    counted and reported."""
+    steps, rate, pil_timeout = 2000, 10_000.0, 2.0
+    res = run_hil("speed", mode="sil", duration=steps / rate, rate=rate, loss=0.05, seed=3,
+                  transport="udp", lockstep=True, pil_timeout=pil_timeout)
+    s = res.summary()
+    assert s["steps"] == steps
+    dropped = s["dropped_on_purpose"]["plant"] + s["dropped_on_purpose"]["controller"]
+    assert 100 <= dropped <= 300             # ~5 % of ~2 x 2000 packets
+    # every dropped packet cost its step its reply, and is reported as lost
+    assert s["lost_packets"] + s["late_packets"] == s["missed_steps"] >= dropped
+    assert s["lost_packets"] >= 1
+    assert any("lost" in n and "held the previous duty" in n for n in s["notes"])
+    # the wait for a lost reply: bounded well under the start-up timeout
+    assert 0 < s["reply_timeout_s"] <= 0.25 * pil_timeout
+    # no stall: the run's wall time is the steps plus one bounded wait per loss, far
+    # below one pil_timeout per lost packet (generous: 4x the bounded waits + 10 s)
+    bound = steps / rate + 4 * s["missed_steps"] * s["reply_timeout_s"] + 10.0
+    assert res.runner["wall_time_s"] < min(bound, 0.25 * dropped * pil_timeout)
+    # the controller filled in the samples it never got, and the loop stayed stable
+    assert s["controller_lost_samples"] == s["dropped_on_purpose"]["plant"]
+    assert np.all(np.abs(res.log["w"]) < 130)
+
+
+def test_some_plots_lack_quantity_names_and_units(tmp_path, capsys, saved_figures):
+    """The HIL report's traces and timing plots: each axis a quantity with its unit."""
+    code = main(["hil", "speed", "--mode", "sil", "--duration", "0.05", "--rate", "5000",
+                 "--loss", "0.01", "--json", "--report", str(tmp_path / "hil.html")])
+    capsys.readouterr()
+    assert code == 0
+    assert len(saved_figures) == 2
+    assert saved_figures.problems() == []

@@ -317,7 +317,7 @@ class ResponseResult:
         after, _ = prob.evaluate(self.values)
         sigs = prob.signal_names
         fig = Figure(figsize=(8, 2.4 * len(sigs) + 0.8), layout="constrained")
-        axes = fig.subplots(len(sigs), 1, squeeze=False)[:, 0]
+        axes = fig.subplots(len(sigs), 1, sharex=True, squeeze=False)[:, 0]
         for ax, s in zip(axes, sigs):
             ax.plot(prob.t, before[s], "--", color="tab:red", label="start")
             ax.plot(prob.t, after[s], "-", color="tab:blue", label="optimized")
@@ -333,9 +333,11 @@ class ResponseResult:
                     for v in (r.lower, r.upper):
                         if math.isfinite(v):
                             ax.axhline(v, color="k", ls=":", lw=1)
-            ax.set_ylabel(s)
+            unit = prob.cm.units[prob.cm.names.index(prob.signals.get(s, s))]
+            ax.set_ylabel(f"{s} [{unit or '1'}]")
             ax.grid(True, alpha=0.3)
-        axes[0].legend(fontsize="small")
+        for ax in axes:                  # each row's own curves (envelopes differ)
+            ax.legend(fontsize="small")
         axes[-1].set_xlabel("t [s]")
         fig.suptitle("response optimization")
         path = Path(path)

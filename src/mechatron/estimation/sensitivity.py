@@ -258,6 +258,9 @@ class SensitivityResult:
     #: ``ST_high``) or, for random and LHS sampling, of the regression coefficients
     #: (``src_low``, ``src_high``); each ``(d, n_req)``.
     intervals: dict = field(default_factory=dict)
+    #: Units of the parameters and the requirements (``""``: dimensionless), for the
+    #: plots' axes.
+    units: dict = field(default_factory=dict)
     #: Problems with the statistics (Sobol indices outside [0, 1], too few Monte Carlo
     #: samples for the regression), also logged.
     warnings: list = field(default_factory=list)
@@ -283,21 +286,25 @@ class SensitivityResult:
                 "sobol_intervals": {k: table(v) for k, v in self.intervals.items()},
                 "ranking": self.ranking, "best": self.best, "warnings": self.warnings}
 
+    def _label(self, name: str) -> str:
+        unit = self.units.get(name, "")
+        return f"{name} [{unit or '1'}]"
+
     def plot_scatter(self, path) -> Path:
         """Scatter matrix: each requirement (rows) against each parameter (columns)."""
         from matplotlib.figure import Figure
         d, r = len(self.names), len(self.requirements)
         fig = Figure(figsize=(2.0 * d + 1, 1.8 * r + 0.8), layout="constrained")
-        axes = fig.subplots(r, d, squeeze=False)
+        axes = fig.subplots(r, d, sharex="col", sharey="row", squeeze=False)
         for a in range(r):
             for b in range(d):
                 ax = axes[a, b]
                 ax.plot(self.X[:, b], self.Y[:, a], ".", ms=2, alpha=0.5)
                 ax.tick_params(labelsize=6)
                 if a == r - 1:
-                    ax.set_xlabel(self.names[b], fontsize=8)
+                    ax.set_xlabel(self._label(self.names[b]), fontsize=8)
                 if b == 0:
-                    ax.set_ylabel(self.requirements[a], fontsize=8)
+                    ax.set_ylabel(self._label(self.requirements[a]), fontsize=8)
         fig.suptitle(f"sensitivity: {self.X.shape[0]} samples ({self.method})")
         path = Path(path)
         save_figure(fig, path, dpi=80)
@@ -318,7 +325,8 @@ class SensitivityResult:
             ax.barh([self.names[i] for i in order], vals,
                     color=["tab:blue" if v >= 0 else "tab:red" for v in vals])
             ax.set_title(self.requirements[a], fontsize=9)
-            ax.set_xlabel(label, fontsize=8)
+            ax.set_xlabel(f"{label} [1]", fontsize=8)
+            ax.set_ylabel("parameter", fontsize=8)
             ax.grid(True, axis="x", alpha=0.3)
         path = Path(path)
         save_figure(fig, path, dpi=80)
@@ -354,6 +362,32 @@ def _evaluate(prob, thetas) -> np.ndarray:
             for r, lab in enumerate(b["out_labels"]):
                 cost += float(np.sum(((s[lab] - b["Ym"][r]) / b["sigma"][r]) ** 2))
         out[k] = [sse[n[4:]] for n in names[:-1]] + [cost]
+    return out
+
+
+def _units(problem, names, reqs) -> dict:
+    """Units of the sampled names (parameters, ``offset:LABEL``, ``EXPERIMENT:NAME``) and
+    of the requirements (``sse_LABEL`` in the output's unit squared, ``cost`` weighted by
+    the noise levels: dimensionless)."""
+    cm = problem.cm
+    params = dict(zip(cm.param_names, cm.param_units))
+    variables = dict(zip(cm.names, cm.units))
+
+    def unit_of(name: str) -> str:
+        if name in params:
+            return params[name]
+        head, _, tail = name.partition(":")
+        if head == "offset":
+            return problem._output_unit(tail)
+        return params.get(tail, variables.get(tail, ""))
+
+    def squared(unit: str) -> str:
+        if not unit or unit == "1":
+            return ""
+        return f"{unit}^2" if unit.isalnum() else f"({unit})^2"
+    out = {n: unit_of(n) for n in names}
+    out.update({r: squared(problem._output_unit(r[4:])) for r in reqs if r.startswith("sse_")})
+    out.update({r: "" for r in reqs if not r.startswith("sse_")})
     return out
 
 
@@ -490,7 +524,8 @@ def run_sensitivity(problem, dists: dict, *, n: int = 256, method: str = "sobol"
                              ranking=ranking, best=best_sets, evaluations=len(X),
                              wall_time=time.perf_counter() - start,
                              workers=int(used_workers or 0), failed=failed,
-                             intervals=intervals, warnings=warnings)
+                             intervals=intervals, warnings=warnings,
+                             units=_units(problem, names, reqs))
 
 
 def local_sensitivity(problem, names, *, rel_step: float = 1e-3) -> dict:

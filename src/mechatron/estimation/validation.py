@@ -95,14 +95,15 @@ class ValidationReport:
             row[1].bar(lags, s["acf"], width=0.6, color="tab:red")
             row[1].axhspan(-band, band, color="tab:blue", alpha=0.15, label="95% band")
             row[1].set_xlabel("lag [samples]")
-            row[1].set_ylabel("error autocorrelation")
+            row[1].set_ylabel("error autocorrelation [1]")
+            row[1].legend(fontsize="small")
             row[1].grid(True, alpha=0.3)
             for name, c in s["ccf"].items():
                 row[2].plot(np.arange(-self.lags, self.lags + 1), c, ".-", ms=3,
                             label=name)
             row[2].axhspan(-band, band, color="tab:blue", alpha=0.15)
             row[2].set_xlabel("lag [samples] (input leads >0)")
-            row[2].set_ylabel("cross-correlation\nerror, input")
+            row[2].set_ylabel("cross-correlation\nerror, input [1]")
             row[2].grid(True, alpha=0.3)
             if s["ccf"]:
                 row[2].legend(fontsize="small")

@@ -109,6 +109,7 @@ class HILResult:
                                    "controller": self.controller.get("dropped_on_purpose",
                                                                      0)},
             "controller_lost_samples": self.controller.get("lost_samples", 0),
+            **({"reply_timeout_s": r["reply_timeout_s"]} if "reply_timeout_s" in r else {}),
             "rms_diff_percent": self.comparison["rms_diff_percent"],
             "peak_diff_percent": self.comparison["peak_diff_percent"],
             "compared": self.comparison["variable"],
@@ -301,11 +302,11 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
             raise SimulationError(f"hil --mode pil: {why}.")
     loop = build_loop(name, rate=rate)
     tmp = None
-    if build_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="mechatron-hil-")
-        build_dir = tmp.name
-    out = Path(build_dir)
     try:
+        if build_dir is None:
+            tmp = tempfile.TemporaryDirectory(prefix="mechatron-hil-")
+            build_dir = tmp.name
+        out = Path(build_dir)
         if transport == "sim":
             res = _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
                            max_overruns, keep_awake)
@@ -439,6 +440,12 @@ def _run(loop, name, mode, duration, rate, loss, transport, realtime, wait, seed
                      + (": QEMU cannot keep the rate; the plant waited for each reply "
                         "(lockstep)" if mode == "pil" else
                         ": lockstep, the plant waited for each reply" if lockstep else ""))
+    if lockstep and runner["missed_steps"]:
+        notes.append(f"{runner['missed_steps']} step(s) got no reply within "
+                     f"{runner.get('reply_timeout_s', pil_timeout):.3g} s (the reply timeout "
+                     "once the link was up: 20 mean round trips, at least 50 ms): "
+                     f"{runner['lost_packets']} lost, {runner['late_packets']} late; the "
+                     "plant held the previous duty")
     if not runner["realtime"] and realtime:
         notes.append("real-time scheduling (SCHED_FIFO) not permitted; ran in the default "
                      "class")

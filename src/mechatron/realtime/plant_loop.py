@@ -104,6 +104,12 @@ def _plant(loop: LoopFunctions):
     return CompiledPlant(loop, cc) if cc else _CasadiPlant(loop)
 
 
+#: Lockstep: once replies have come, one not in after this many mean round trips...
+LOSS_RTT_FACTOR = 20.0
+#: ...and at least this many seconds is lost (as the C runner ``mt_plant`` does).
+LOSS_FLOOR_S = 0.05
+
+
 def run_plant(io: PlantIO, name: str | LoopFunctions = "speed", *, rate: float = 200.0,
               duration: float = 1.0, wait: float = 0.8, lockstep: float | None = None,
               hello_timeout: float = 10.0) -> dict:
@@ -111,7 +117,9 @@ def run_plant(io: PlantIO, name: str | LoopFunctions = "speed", *, rate: float =
 
     Each step ``k`` at ``t_k = k / rate`` (absolute schedule): measure, ``io.write``,
     ``io.read`` until ``t_k + wait / rate`` (with ``lockstep`` set: until that many
-    seconds after the write, and the schedule restarts after each step), advance the
+    seconds after the write, and the schedule restarts after each step; once replies
+    have come, only :data:`LOSS_RTT_FACTOR` times their mean round trip, at least
+    :data:`LOSS_FLOOR_S`, so that a lost packet costs a bounded wait), advance the
     plant with the command's duty, or the previous one when none came (a lost sample).
 
     Returns ``{"log": {column: array}, "stats": {...}}``: the log's columns are
@@ -130,6 +138,7 @@ def run_plant(io: PlantIO, name: str | LoopFunctions = "speed", *, rate: float =
     ref = 0.0
     rows = np.zeros((steps, len(LOG_COLUMNS) + 2))
     overruns = 0
+    sum_rtt, n_rtt, max_tmo = 0.0, 0, 0.0
     io.start(hello_timeout)
     start = time.monotonic() + 1e-3
     t0_wall = start
@@ -141,9 +150,20 @@ def run_plant(io: PlantIO, name: str | LoopFunctions = "speed", *, rate: float =
                 time.sleep(t_k - now)
             late = time.monotonic() - t_k
             meas = plant.out()
+            t_send = time.monotonic()
             io.write(k, k * period, meas)
-            deadline = (time.monotonic() + lockstep) if lockstep else t_k + wait * period
+            if lockstep:
+                tmo = lockstep
+                if n_rtt:
+                    tmo = min(lockstep, max(LOSS_FLOOR_S, LOSS_RTT_FACTOR * sum_rtt / n_rtt))
+                    max_tmo = max(max_tmo, tmo)
+                deadline = t_send + tmo
+            else:
+                deadline = t_k + wait * period
             cmd = io.read(k, deadline)
+            if cmd is not None and lockstep:
+                sum_rtt += time.monotonic() - t_send
+                n_rtt += 1
             if cmd is not None:
                 duty = cmd.values[0]
                 if len(cmd.values) > 1:
@@ -164,4 +184,6 @@ def run_plant(io: PlantIO, name: str | LoopFunctions = "speed", *, rate: float =
     return {"log": {c: rows[:, i].copy() for i, c in enumerate(cols)},
             "stats": {"kind": io.kind, "steps": steps, "rate_hz": rate,
                       "overruns": overruns, "wall_time_s": wall,
-                      "lockstep": bool(lockstep), **io.stats.as_dict()}}
+                      "lockstep": bool(lockstep),
+                      "reply_timeout_s": max_tmo if lockstep else wait * period,
+                      **io.stats.as_dict()}}

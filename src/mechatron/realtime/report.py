@@ -32,7 +32,7 @@ def _png(fig) -> str:
 def _figure(rows: int):
     from matplotlib.figure import Figure   # no pyplot: no global state
     fig = Figure(figsize=(9, 2.3 * rows + 0.6), layout="constrained")
-    return fig, fig.subplots(rows, 1, squeeze=False)[:, 0]
+    return fig, fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
 
 
 def _rows(items) -> str:
@@ -79,7 +79,7 @@ def write_report(res: HILResult, path) -> Path:
     ok = rtt >= 0
     ax[1].semilogy(t[ok], np.maximum(rtt[ok], 1e-9) * 1e6, ".", ms=1, label="round trip")
     ax[1].axhline(1e6 / res.rate, color="r", lw=1, label="period")
-    ax[1].set_ylabel("[us]")
+    ax[1].set_ylabel("time [us]")
     ax[1].set_xlabel("t [s]")
     ax[1].legend(loc="best")
     timing = _png(fig)

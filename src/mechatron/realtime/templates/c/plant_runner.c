@@ -5,8 +5,11 @@
  * when asked and permitted. Each step k:
  *   1. sleep until t_k = start + k / rate; the wake-up lateness is the step's jitter;
  *   2. measure (plant_out), send SAMPLE(seq k, encoder count) to the controller;
- *   3. wait for COMMAND(seq k) until t_k + wait * period (lockstep mode: until a timeout),
- *      else keep the previous duty (a missed step); older replies are counted late;
+ *   3. wait for COMMAND(seq k) until t_k + wait * period (lockstep mode: until a timeout,
+ *      once replies have come LOSS_RTT_FACTOR x their mean round trip, at least
+ *      LOSS_FLOOR_S and at most the --lockstep timeout, so that a lost packet costs a
+ *      bounded wait, not the start-up timeout), else keep the previous duty (a missed
+ *      step); older replies are counted late;
  *   4. advance the plant (plant_step) with the duty over [t_k, t_k+1];
  *   5. log the step; an overrun is a step that ends after t_k+1.
  * With --transport none it runs open loop at a fixed --duty (a pure timing test).
@@ -36,6 +39,9 @@
 static const char *COLS[NCOL] = {"t", "duty", "ref", "count", "w", "phi", "v_c", "i",
                                  "got", "wake_late_s", "exec_s", "busy_s", "rtt_s"};
 #define MAX_STATES 64
+/* lockstep: a reply not in after LOSS_RTT_FACTOR mean round trips (>= LOSS_FLOOR_S) is lost */
+#define LOSS_RTT_FACTOR 20.0
+#define LOSS_FLOOR_S 0.05
 
 static volatile sig_atomic_t g_stop = 0;
 
@@ -109,6 +115,8 @@ int main(int argc, char **argv)
     double *log;
     long k, done = 0, overruns = 0, missed = 0, late = 0, stale = 0;
     double max_exec = 0, max_late = 0, sum_exec = 0;
+    double sum_rtt = 0, max_tmo = 0;      /* lockstep: replies' round trips, longest wait */
+    long n_rtt = 0;
     struct timespec start, deadline;
     int64_t period_ns;
     int nx, i;
@@ -207,8 +215,15 @@ int main(int argc, char **argv)
             t_send = mt_now();
             mt_link_send(&link, &s, 1);
             if (o.lockstep > 0) {
+                double tmo = o.lockstep;
+                if (n_rtt > 0) {
+                    double adaptive = LOSS_RTT_FACTOR * sum_rtt / (double)n_rtt;
+                    if (adaptive < LOSS_FLOOR_S) adaptive = LOSS_FLOOR_S;
+                    if (adaptive < tmo) tmo = adaptive;
+                    if (tmo > max_tmo) max_tmo = tmo;
+                }
                 clock_gettime(CLOCK_MONOTONIC, &until);
-                mt_ts_add(&until, (int64_t)(o.lockstep * 1e9));
+                mt_ts_add(&until, (int64_t)(tmo * 1e9));
             } else {
                 mt_ts_add(&until, (int64_t)(o.wait * (double)period_ns));
             }
@@ -219,6 +234,8 @@ int main(int argc, char **argv)
                     duty = r.a;
                     ref = r.b;
                     rtt = mt_now() - t_send;
+                    sum_rtt += rtt;
+                    n_rtt++;
                 } else if (r.seq < (uint32_t)k) {
                     late++;
                 } else {
@@ -306,6 +323,8 @@ int main(int argc, char **argv)
         fprintf(f, " \"max_wake_late_s\": %.9g, \"wall_time_s\": %.9g, "
                    "\"realtime\": %s, \"lockstep\": %s,\n",
                 max_late, t_wall, rt_ok ? "true" : "false", o.lockstep > 0 ? "true" : "false");
+        /* the longest a step waited for its reply once the link was up */
+        fprintf(f, " \"reply_timeout_s\": %.9g,\n", o.lockstep > 0 ? max_tmo : o.wait / o.rate);
         fprintf(f, " \"interrupted\": %s, \"columns\": [", g_stop ? "true" : "false");
         for (i = 0; i < NCOL; ++i) fprintf(f, "%s\"%s\"", i ? ", " : "", COLS[i]);
         fprintf(f, "]}\n");
