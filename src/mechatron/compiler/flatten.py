@@ -105,6 +105,23 @@ class FlatModel:
     def time(self) -> ca.SX:
         return self.context.time
 
+    def stack_variables(self, names=None) -> ca.SX:
+        """The symbols of the variables ``names`` (default: all, in declaration order)
+        as one column, taken from the column of all variable symbols, which is stacked
+        once: a ``vertcat`` converts each scalar from Python (about 1 us each), indexing
+        stays in CasADi."""
+        cache = self.__dict__.get("_variable_stack")
+        if cache is None or cache[0] != len(self.variables):
+            index = {n: k for k, n in enumerate(self.variables)}
+            column = ca.vertcat(*[v.sym for v in self.variables.values()]) if index \
+                else ca.SX(0, 1)
+            cache = self.__dict__["_variable_stack"] = (len(index), column, index)
+        _, column, index = cache
+        if names is None:
+            return column
+        rows = [index[n] for n in names]
+        return column[rows] if rows else ca.SX(0, 1)
+
     @functools.cached_property
     def physical_owners(self) -> frozenset:
         """Paths of the components that have physical (conserving) ports."""
@@ -930,7 +947,7 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
             cols.append(index.setdefault(name, len(index)))
             vals.append(sign)
     A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
-    x = ca.vertcat(*[flat.variables[name].sym for name in index])
+    x = flat.stack_variables(index)
     for (_, origin), residual in zip(flow_sums, ca.vertsplit(ca.mtimes(A, x))):
         flat.equations.append(FlatEquation(residual, origin))
 

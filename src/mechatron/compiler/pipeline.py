@@ -76,10 +76,10 @@ def _logged_expressions(flat, alias) -> list:
             values.append(e[1])
         else:
             scaled.append(j)
-            reps.append(flat.variables[e[0]].sym)
+            reps.append(e[0])
             factors.append(e[1])
     if scaled:
-        exprs = ca.vertsplit(ca.times(ca.SX(ca.DM(factors)), ca.vertcat(*reps)))
+        exprs = ca.vertsplit(ca.times(ca.SX(ca.DM(factors)), flat.stack_variables(reps)))
         for j, e in zip(scaled, exprs):
             out[j] = e
     if constant:
