@@ -806,13 +806,18 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
             problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
                             "or remove the component. "
                             f"{_hint(el)}".rstrip())
-        if isinstance(el, Component):
-            for key, decl in type(el)._declarations.items():
-                if isinstance(decl, Input) and port_key(SignalRef(el, key)) not in \
-                        connected and el is not model:  # the root's: external inputs
+        if isinstance(el, Component) and el is not model:  # the root's: external inputs
+            for key in _input_keys(type(el)):
+                if port_key(SignalRef(el, key)) not in connected:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
                                     "connected. Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, sets, problems)
+
+
+@functools.lru_cache(maxsize=None)
+def _input_keys(cls) -> tuple:
+    """The keys of a class's signal inputs, in declaration order (once per class)."""
+    return tuple(k for k, d in cls._declarations.items() if isinstance(d, Input))
 
 
 def _open_port(flat: FlatModel, port: Connector) -> None:
@@ -966,12 +971,12 @@ def _check_references(flat, model, elements, sets, problems) -> None:
     for el in elements:
         if not isinstance(el, Component):
             continue
-        by_domain: dict[object, list[int]] = {}
-        for port in el.ports.values():
-            by_domain.setdefault(type(port).domain, []).append(id(port))
-        for ids in by_domain.values():
-            for i in ids[1:]:
-                net.union(ids[0], i)
+        first: dict[object, int] = {}     # domain -> the first port of it on el
+        for port in el._children.values():
+            if isinstance(port, Connector):
+                i = first.setdefault(type(port).domain, id(port))
+                if i != id(port):
+                    net.union(i, id(port))
     members: dict[int, list[Connector]] = {}
     for cset in sets:
         for m in cset.members:
