@@ -453,7 +453,7 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                 _add_equation(flat, el, klass, k, item, problems)
     for tpl in templates.values():
         if tpl is not None:
-            tpl.instantiate()
+            tpl.instantiate(flat)
     _discrete_states(flat, problems)
     pending = [eq for eq in flat.equations if eq.residual is None]
     if pending:
@@ -483,7 +483,7 @@ class _Template:
     instance, as before."""
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
-                 "equations", "n_eq", "aliases", "relative")
+                 "equations", "n_eq", "aliases", "relative", "var_slots", "paths")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables):
         self.keys = keys            # own declaration keys, in template order
@@ -495,12 +495,15 @@ class _Template:
         residuals = ca.vertcat(*lhs) - ca.vertcat(*rhs) if lhs else ca.SX(0, 1)
         self.fun = ca.Function("template", [self.svec], [residuals])
         self.instances: list = []   # SX column of each instance's symbols
+        self.paths: list = []       # each instance's path
         self.equations: list = []   # FlatEquation of each instance, in order
         # each slot's path relative to the instance, and the alias pattern of each
         # equation over the slots (read once here, not once per instance)
         self.relative = [f".{k}" for k in keys] + \
             [f".{port}.{k}" for port, ks in ports for k in ks]
         index = {s.name(): i for i, s in enumerate(syms)}
+        # which of the slots of self.relative are variables (not parameters)
+        self.var_slots = [syms[i].name() in variables for i in range(len(self.relative))]
         self.aliases = [_alias_pattern(r, index, variables)
                         for r in ca.vertsplit(residuals)] if lhs else []
 
@@ -515,6 +518,7 @@ class _Template:
         args.extend([der(args[i].name()) for i in self.derived])
         args.append(flat.context.time)
         self.instances.append(args)
+        self.paths.append(el.path)
         owner = el.path
         prefix = owner
         rel = self.relative
@@ -530,20 +534,55 @@ class _Template:
         self.equations.append(eqs)
         flat.equations.extend(eqs)
 
-    def instantiate(self) -> None:
+    def instantiate(self, flat: FlatModel) -> None:
         """Every instance's residuals from one call of the mapped function."""
         n = len(self.instances)
         if not n or not self.n_eq:
             return
         width = self.svec.numel()
-        flat_args = [a for args in self.instances for a in args]
-        columns = ca.reshape(ca.vertcat(*flat_args), width, n)
+        columns = self._columns(flat, n, width)
+        if columns is None:
+            flat_args = [a for args in self.instances for a in args]
+            columns = ca.reshape(ca.vertcat(*flat_args), width, n)
         out = (self.fun.map(n)(columns) if n > 1 else self.fun(columns)).nonzeros()
         k = 0
         for eqs in self.equations:
             for eq in eqs:
                 eq.residual = out[k]
                 k += 1
+
+
+    def _columns(self, flat: FlatModel, n: int, width: int):
+        """The instances' arguments as a ``width`` x ``n`` matrix; the variable slots are
+        sliced from the model's stacked variable symbols (`FlatModel.stack_variables`),
+        only the other slots (parameters, derivatives, time) are stacked here. None if a
+        variable slot is not a model variable (then the caller stacks every argument)."""
+        variables = flat.variables
+        slots = [i for i, name in enumerate(self.relative) if self.var_slots[i]]
+        if not slots:
+            return None
+        others = [i for i in range(width) if i >= len(self.relative) or
+                  not self.var_slots[i]]
+        names = []
+        rel = self.relative
+        for path, args in zip(self.paths, self.instances):
+            for i in slots:
+                name = path + rel[i] if path else rel[i][1:]
+                v = variables.get(name)
+                if v is None or v.sym is not args[i]:
+                    return None
+                names.append(name)
+        var_part = ca.reshape(flat.stack_variables(names), len(slots), n)
+        if others:
+            rest = ca.vertcat(*[args[i] for args in self.instances for i in others])
+            stacked = ca.vertcat(var_part, ca.reshape(rest, len(others), n))
+        else:
+            stacked = var_part
+        order = slots + others            # row r of stacked holds slot order[r]
+        position = [0] * width
+        for r, i in enumerate(order):
+            position[i] = r
+        return stacked[position, :]
 
 
 def _alias_pattern(r: ca.SX, index: dict, variables: set) -> tuple:

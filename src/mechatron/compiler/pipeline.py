@@ -131,7 +131,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # each scalar from Python: about 1 us each)
     res_vec = ca.vertcat(*residuals) if residuals else None
     symbols = unknown_syms + der_syms + p_syms + [ctx.time]
-    sym_vec = ca.vertcat(*symbols)
+    sym_vec = ca.vertcat(flat.stack_variables(alias.unknowns), *der_syms, *p_syms, ctx.time)
     scanned, relations = extract_relations(residuals, owners, symbols,
                                            stacked=(sym_vec, res_vec) if residuals else None)
     # the residuals unchanged (no relation in them): their stack serves the lowering; the
