@@ -130,6 +130,11 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     old: list[ca.SX] = []
     new: list[ca.SX] = []        # replacement = factor * new (one product in bulk)
     factors: list[float] = []
+    # variables replaced by a scaled representative, by name: their columns are slices
+    # of the stacked variable symbols (FlatModel.stack_variables), not stacked again
+    old_names: list[str] = []
+    new_names: list[str] = []
+    name_factors: list[float] = []
     for root, members in classes.items():
         if root in const:
             value_root = const[root]
@@ -150,25 +155,29 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             continue
         best_name, best_f = max(members, key=lambda m: _rank(unknowns[m[0]], m[0] in
                                                              derivative))
-        rep = unknowns[best_name].sym
         result.unknowns.append(best_name)
         for name, f in members:
             if name == best_name:
                 continue
             k = f / best_f  # name = k * best
             result.eliminated[name] = (best_name, k)
-            old.append(unknowns[name].sym)
-            new.append(rep)
-            factors.append(k)
+            old_names.append(name)
+            new_names.append(best_name)
+            name_factors.append(k)
             if name in derivative:
                 old.append(derivative[name])
                 new.append(flat.context.der_symbol(best_name))
                 factors.append(k)
         _merge_starts(result, flat, best_name, [(n, f / best_f) for n, f in members])
-    if old:
-        replacement = ca.vertcat(*new) * ca.DM(factors)
-        res = ca.substitute([eq.residual for eq in remaining], [ca.vertcat(*old)],
-                            [replacement])
+    if old or old_names:
+        pairs = []
+        if old_names:
+            pairs.append((flat.stack_variables(old_names),
+                          flat.stack_variables(new_names) * ca.DM(name_factors)))
+        if old:
+            pairs.append((ca.vertcat(*old), ca.vertcat(*new) * ca.DM(factors)))
+        res = ca.substitute([eq.residual for eq in remaining], [p[0] for p in pairs],
+                            [p[1] for p in pairs])
         result.equations = [FlatEquation(r, eq.origin, eq.owner)
                             for r, eq in zip(res, remaining)]
     return result

@@ -357,7 +357,6 @@ class _Symbols:
             if d == ONE and (v.kind == "input" or v.kind == "output" or
                              (v.kind == "variable" and v.owner not in physical)):
                 d = FREE
-            syms.append(v.sym)
             dims.append(d)
             by_name[name] = d
         for p in flat.parameters.values():
@@ -371,7 +370,8 @@ class _Symbols:
             dims.append(_der(_of(name, by_name, ctx)))
         syms.append(ctx.time)
         dims.append(SECOND)
-        self.vector = ca.vertcat(*syms)
+        # the variables' column is stacked once per model (shared with other passes)
+        self.vector = ca.vertcat(flat.stack_variables(), *syms)
         self.dims = dims
 
     def _dim(self, unit: str):

@@ -105,6 +105,23 @@ class FlatModel:
     def time(self) -> ca.SX:
         return self.context.time
 
+    def stack_variables(self, names=None) -> ca.SX:
+        """The symbols of the variables ``names`` (default: all, in declaration order)
+        as one column, taken from the column of all variable symbols, which is stacked
+        once: a ``vertcat`` converts each scalar from Python (about 1 us each), indexing
+        stays in CasADi."""
+        cache = self.__dict__.get("_variable_stack")
+        if cache is None or cache[0] != len(self.variables):
+            index = {n: k for k, n in enumerate(self.variables)}
+            column = ca.vertcat(*[v.sym for v in self.variables.values()]) if index \
+                else ca.SX(0, 1)
+            cache = self.__dict__["_variable_stack"] = (len(index), column, index)
+        _, column, index = cache
+        if names is None:
+            return column
+        rows = [index[n] for n in names]
+        return column[rows] if rows else ca.SX(0, 1)
+
     @functools.cached_property
     def physical_owners(self) -> frozenset:
         """Paths of the components that have physical (conserving) ports."""
@@ -436,7 +453,7 @@ def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connec
                 _add_equation(flat, el, klass, k, item, problems)
     for tpl in templates.values():
         if tpl is not None:
-            tpl.instantiate()
+            tpl.instantiate(flat)
     _discrete_states(flat, problems)
     pending = [eq for eq in flat.equations if eq.residual is None]
     if pending:
@@ -466,7 +483,7 @@ class _Template:
     instance, as before."""
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
-                 "equations", "n_eq", "aliases", "relative")
+                 "equations", "n_eq", "aliases", "relative", "var_slots", "paths")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables):
         self.keys = keys            # own declaration keys, in template order
@@ -478,12 +495,15 @@ class _Template:
         residuals = ca.vertcat(*lhs) - ca.vertcat(*rhs) if lhs else ca.SX(0, 1)
         self.fun = ca.Function("template", [self.svec], [residuals])
         self.instances: list = []   # SX column of each instance's symbols
+        self.paths: list = []       # each instance's path
         self.equations: list = []   # FlatEquation of each instance, in order
         # each slot's path relative to the instance, and the alias pattern of each
         # equation over the slots (read once here, not once per instance)
         self.relative = [f".{k}" for k in keys] + \
             [f".{port}.{k}" for port, ks in ports for k in ks]
         index = {s.name(): i for i, s in enumerate(syms)}
+        # which of the slots of self.relative are variables (not parameters)
+        self.var_slots = [syms[i].name() in variables for i in range(len(self.relative))]
         self.aliases = [_alias_pattern(r, index, variables)
                         for r in ca.vertsplit(residuals)] if lhs else []
 
@@ -498,6 +518,7 @@ class _Template:
         args.extend([der(args[i].name()) for i in self.derived])
         args.append(flat.context.time)
         self.instances.append(args)
+        self.paths.append(el.path)
         owner = el.path
         prefix = owner
         rel = self.relative
@@ -513,20 +534,55 @@ class _Template:
         self.equations.append(eqs)
         flat.equations.extend(eqs)
 
-    def instantiate(self) -> None:
+    def instantiate(self, flat: FlatModel) -> None:
         """Every instance's residuals from one call of the mapped function."""
         n = len(self.instances)
         if not n or not self.n_eq:
             return
         width = self.svec.numel()
-        flat_args = [a for args in self.instances for a in args]
-        columns = ca.reshape(ca.vertcat(*flat_args), width, n)
+        columns = self._columns(flat, n, width)
+        if columns is None:
+            flat_args = [a for args in self.instances for a in args]
+            columns = ca.reshape(ca.vertcat(*flat_args), width, n)
         out = (self.fun.map(n)(columns) if n > 1 else self.fun(columns)).nonzeros()
         k = 0
         for eqs in self.equations:
             for eq in eqs:
                 eq.residual = out[k]
                 k += 1
+
+
+    def _columns(self, flat: FlatModel, n: int, width: int):
+        """The instances' arguments as a ``width`` x ``n`` matrix; the variable slots are
+        sliced from the model's stacked variable symbols (`FlatModel.stack_variables`),
+        only the other slots (parameters, derivatives, time) are stacked here. None if a
+        variable slot is not a model variable (then the caller stacks every argument)."""
+        variables = flat.variables
+        slots = [i for i, name in enumerate(self.relative) if self.var_slots[i]]
+        if not slots:
+            return None
+        others = [i for i in range(width) if i >= len(self.relative) or
+                  not self.var_slots[i]]
+        names = []
+        rel = self.relative
+        for path, args in zip(self.paths, self.instances):
+            for i in slots:
+                name = path + rel[i] if path else rel[i][1:]
+                v = variables.get(name)
+                if v is None or v.sym is not args[i]:
+                    return None
+                names.append(name)
+        var_part = ca.reshape(flat.stack_variables(names), len(slots), n)
+        if others:
+            rest = ca.vertcat(*[args[i] for args in self.instances for i in others])
+            stacked = ca.vertcat(var_part, ca.reshape(rest, len(others), n))
+        else:
+            stacked = var_part
+        order = slots + others            # row r of stacked holds slot order[r]
+        position = [0] * width
+        for r, i in enumerate(order):
+            position[i] = r
+        return stacked[position, :]
 
 
 def _alias_pattern(r: ca.SX, index: dict, variables: set) -> tuple:
@@ -789,13 +845,18 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
             problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
                             "or remove the component. "
                             f"{_hint(el)}".rstrip())
-        if isinstance(el, Component):
-            for key, decl in type(el)._declarations.items():
-                if isinstance(decl, Input) and port_key(SignalRef(el, key)) not in \
-                        connected and el is not model:  # the root's: external inputs
+        if isinstance(el, Component) and el is not model:  # the root's: external inputs
+            for key in _input_keys(type(el)):
+                if port_key(SignalRef(el, key)) not in connected:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
                                     "connected. Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, sets, problems)
+
+
+@functools.lru_cache(maxsize=None)
+def _input_keys(cls) -> tuple:
+    """The keys of a class's signal inputs, in declaration order (once per class)."""
+    return tuple(k for k, d in cls._declarations.items() if isinstance(d, Input))
 
 
 def _open_port(flat: FlatModel, port: Connector) -> None:
@@ -930,7 +991,7 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
             cols.append(index.setdefault(name, len(index)))
             vals.append(sign)
     A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
-    x = ca.vertcat(*[flat.variables[name].sym for name in index])
+    x = flat.stack_variables(index)
     for (_, origin), residual in zip(flow_sums, ca.vertsplit(ca.mtimes(A, x))):
         flat.equations.append(FlatEquation(residual, origin))
 
@@ -949,12 +1010,12 @@ def _check_references(flat, model, elements, sets, problems) -> None:
     for el in elements:
         if not isinstance(el, Component):
             continue
-        by_domain: dict[object, list[int]] = {}
-        for port in el.ports.values():
-            by_domain.setdefault(type(port).domain, []).append(id(port))
-        for ids in by_domain.values():
-            for i in ids[1:]:
-                net.union(ids[0], i)
+        first: dict[object, int] = {}     # domain -> the first port of it on el
+        for port in el._children.values():
+            if isinstance(port, Connector):
+                i = first.setdefault(type(port).domain, id(port))
+                if i != id(port):
+                    net.union(i, id(port))
     members: dict[int, list[Connector]] = {}
     for cset in sets:
         for m in cset.members:

@@ -129,7 +129,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
            var_names: list[str], var_to_diff: list[int], adj: list[list[int]],
            roles: dict[str, tuple[str, str, str, bool]] | None = None,
            classes: dict[str, str] | None = None,
-           parameters: list[ca.SX] | None = None) -> Reduction:
+           parameters: list[ca.SX] | None = None,
+           stacked: tuple[ca.SX, ca.SX] | None = None) -> Reduction:
     """Reduce the linear part of the equations exactly; raise on a dependency.
 
     An unknown's coefficient takes part when it is a number or an expression of
@@ -152,6 +153,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     parameters : list of SX, optional
         The parameter symbols: coefficients that depend on them alone are exact
         symbolic coefficients; default: only numeric coefficients are.
+    stacked : (SX, SX), optional
+        ``vertcat(*res)`` and ``vertcat(*var_syms)``, if the caller has them already.
 
     Raises
     ------
@@ -162,7 +165,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     n = len(var_syms)
     if not res:
         return Reduction([list(r) for r in adj])
-    jac = ca.jacobian(ca.vertcat(*res), ca.vertcat(*var_syms))
+    jac = ca.jacobian(*(stacked if stacked is not None else
+                        (ca.vertcat(*res), ca.vertcat(*var_syms))))
     rows, cols = jac.sparsity().get_triplet()
     const: list[set[int]] = [set() for _ in res]
     linear: list[dict] = [{} for _ in res]

@@ -76,10 +76,10 @@ def _logged_expressions(flat, alias) -> list:
             values.append(e[1])
         else:
             scaled.append(j)
-            reps.append(flat.variables[e[0]].sym)
+            reps.append(e[0])
             factors.append(e[1])
     if scaled:
-        exprs = ca.vertsplit(ca.times(ca.SX(ca.DM(factors)), ca.vertcat(*reps)))
+        exprs = ca.vertsplit(ca.times(ca.SX(ca.DM(factors)), flat.stack_variables(reps)))
         for j, e in zip(scaled, exprs):
             out[j] = e
     if constant:
@@ -127,8 +127,18 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     residuals = [eq.residual for eq in alias.equations]
     origins = [eq.origin for eq in alias.equations]
     owners = [eq.owner for eq in alias.equations]
-    residuals, relations = extract_relations(
-        residuals, owners, unknown_syms + der_syms + p_syms + [ctx.time])
+    # stacked once for the relation scan and the structural analysis (a vertcat converts
+    # each scalar from Python: about 1 us each)
+    res_vec = ca.vertcat(*residuals) if residuals else None
+    symbols = unknown_syms + der_syms + p_syms + [ctx.time]
+    sym_vec = ca.vertcat(flat.stack_variables(alias.unknowns), *der_syms, *p_syms, ctx.time)
+    scanned, relations = extract_relations(residuals, owners, symbols,
+                                           stacked=(sym_vec, res_vec) if residuals else None)
+    # the residuals unchanged (no relation in them): their stack serves the lowering; the
+    # lowering's variables are the unknowns, then their derivatives
+    stacked = (res_vec, sym_vec[:len(unknown_syms) + len(der_syms)]) \
+        if residuals and not relations else None
+    residuals = scanned
     plan = prepare_events(flat, alias, relations)
     lap("relations")
 
@@ -146,7 +156,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                 declared={n: i for i, n in enumerate(flat.variables)},
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
                 classes=dict(flat.components), physical=flat.physical_owners,
-                parameters=p_syms)
+                parameters=p_syms, stacked=stacked)
     lap("structure")
 
     # every logged variable as an expression of the unknowns

@@ -34,7 +34,9 @@ class Relation:
 
 
 def extract_relations(residuals: list[ca.SX], owners: list[str],
-                      symbols: list[ca.SX]) -> tuple[list[ca.SX], list[Relation]]:
+                      symbols: list[ca.SX],
+                      stacked: tuple[ca.SX, ca.SX] | None = None
+                      ) -> tuple[list[ca.SX], list[Relation]]:
     """Replace the relations in ``residuals`` by placeholders.
 
     Parameters
@@ -45,10 +47,14 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
         Component path of each residual.
     symbols : list of SX
         Every free symbol the residuals may contain (unknowns, parameters, time).
+    stacked : (SX, SX), optional
+        ``vertcat(*symbols)`` and ``vertcat(*residuals)``, if the caller has them.
     """
     if not residuals:
         return residuals, []
-    f = ca.Function("scan", [ca.vertcat(*symbols)], [ca.vertcat(*residuals)])
+    sym_vec, res_vec = stacked if stacked is not None else (ca.vertcat(*symbols),
+                                                             ca.vertcat(*residuals))
+    f = ca.Function("scan", [sym_vec], [res_vec])
     n = f.n_instructions()
     ops = [f.instruction_id(k) for k in range(n)]
     if not any(op in _REL_OPS for op in ops):

@@ -65,7 +65,8 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
           roles: dict[str, tuple[str, str, str, bool]] | None = None,
           classes: dict[str, str] | None = None,
           physical: set[str] | None = None,
-          parameters: list[ca.SX] | None = None) -> Lowered:
+          parameters: list[ca.SX] | None = None,
+          stacked: tuple[ca.SX, ca.SX] | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
@@ -100,6 +101,9 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     parameters : list of SX, optional
         Parameter symbols: linear coefficients that depend on them alone (a transformer
         ratio) take part in the exact elimination of `mechatron.compiler.linear.reveal`.
+    stacked : (SX, SX), optional
+        ``vertcat(*residuals)`` and the unknowns' symbols followed by the derivative
+        symbols (in the order of ``unknowns``), stacked, if the caller has them already.
 
     Notes
     -----
@@ -121,19 +125,20 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     args = (name, residuals, origins, unknowns, syms, derivative, time, start_guess,
             hints, preference, declared, roles, classes, physical)
     try:
-        return _lower(*args, None)
+        return _lower(*args, None, stacked)
     except _Singular:
         if not parameters:
             raise
     try:
-        return _lower(*args, parameters)
+        return _lower(*args, parameters, stacked)
     except _Singular as exc:
         raise StructuralError(str(exc), equations=exc.equations, variables=exc.variables,
                               path=exc.path) from None
 
 
 def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_guess, hints,
-           preference, declared, roles, classes, physical, parameters) -> Lowered:
+           preference, declared, roles, classes, physical, parameters,
+           stacked=None) -> Lowered:
     # -- variables of the structural problem: unknowns and their derivatives -------------
     var_syms: list[ca.SX] = [syms[n] for n in unknowns]
     var_names: list[str] = list(unknowns)
@@ -147,7 +152,12 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             var_to_diff.append(-1)
     res = list(residuals)
     orig = list(origins)
-    adj = _csr(ca.vertcat(*res), ca.vertcat(*var_syms)) if res else []
+    # the residuals and variables stacked once (a vertcat converts each scalar from
+    # Python); the caller may pass them already stacked
+    if res:
+        res_vec, var_vec = stacked if stacked is not None else (ca.vertcat(*res),
+                                                                ca.vertcat(*var_syms))
+    adj = _csr(res_vec, var_vec) if res else []
     # derivative symbols that appear nowhere do not make their variable a state
     used = set(v for row in adj for v in row)
     for i, d in enumerate(var_to_diff):
@@ -159,7 +169,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # constraints hidden in the linear network equations (a cut set of current sources
     # and inductors, a loop of voltage sources and capacitors) are exposed first
     reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
-                       classes, parameters)
+                       classes, parameters, stacked=(res_vec, var_vec) if res else None)
     try:
         ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
     except StructuralError as exc:
@@ -507,9 +517,9 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         classes[c].append(i)
     out: dict[int, ca.SX] = {}
     for idx in classes:
-        ex = ca.vertcat(*[res[singles[i][0]] for i in idx])
-        xs = ca.vertcat(*[var_syms[singles[i][1]] for i in idx])
-        ds = ca.vertcat(*[dz[i] for i in idx])
+        # slices of the stacked vectors (indexing by a list of ints stays in C++; a
+        # vertcat of the scalars converts each one from Python)
+        ex, xs, ds = E[idx], X[idx], d[idx]
         rest = ca.substitute(ex, xs, ca.DM.zeros(len(idx)))
         for i, sol in zip(idx, ca.vertsplit(-rest / ds)):
             out[singles[i][0]] = sol
