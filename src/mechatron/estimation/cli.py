@@ -129,6 +129,15 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         f"{e}: " + ", ".join(f"{lab} {v0:.3g} -> {v:.3g}"
                              for (lab, v), v0 in zip(d.items(), res.nrmse_initial[e].values()))
         for e, d in res.nrmse.items()))
+    if res.discretization:
+        emit("  discretization (Radau substeps per sample; error estimate in standard "
+             "errors, start -> estimates): " + "; ".join(
+                 f"{e}: {d['substeps']} ({d['chosen']}), "
+                 + (f"{d['error_initial']:.2g} -> " if d.get("error_initial") is not None
+                    else "")
+                 + (f"{d['error']:.2g}" if d.get("error") is not None else "not finite")
+                 + f" (tolerance {d['tolerance']:g})"
+                 for e, d in res.discretization.items()))
     for e, d in res.validation.items():
         emit(f"  validation on {e} (not fitted): " + "; ".join(
             f"{lab} RMSE {v['rmse']:.4g}, NRMSE {v['nrmse']:.3g}, relative error "
