@@ -96,7 +96,7 @@ def test_the_error_estimate_resolves_a_resonance_the_time_constant_rule_steps_ov
     assert not _inside(fixed, "zeta", 0.02)
     assert fixed.parameters["zeta"] < 0.01
     assert any("discretization error" in w for w in fixed.warnings)
-    assert fixed.discretization["synthetic"]["error"] > 1.0
+    assert fixed.discretization["synthetic"]["error_std"] > 1.0
 
     prob = EstimationProblem(cm, [exp], free, inputs={"r": "r"}, outputs={"y": "x"},
                              jit=False)
@@ -130,7 +130,7 @@ def test_a_kink_written_with_fmin_fmax_does_not_bias_the_estimates():
                                                     FreeParameter("B", 0.1, 0)],
                                         inputs={"r": "r"}, outputs={"y": "w"},
                                         substeps=1, jit=False), refine=False)
-    assert coarse.discretization["synthetic"]["error"] > 1.0
+    assert coarse.discretization["synthetic"]["error_std"] > 1.0
     assert any("discretization error" in w and "1 substeps" in w for w in coarse.warnings)
 
 

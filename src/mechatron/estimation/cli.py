@@ -130,12 +130,16 @@ def cmd_estimate(args: argparse.Namespace) -> int:
                              for (lab, v), v0 in zip(d.items(), res.nrmse_initial[e].values()))
         for e, d in res.nrmse.items()))
     if res.discretization:
-        emit("  discretization (Radau substeps per sample; error estimate in standard "
-             "errors, start -> estimates): " + "; ".join(
-                 f"{e}: {d['substeps']} ({d['chosen']}), "
+        emit("  discretization (Radau substeps per sample; step-doubling error estimate "
+             "in noise-level units, start -> estimates): " + "; ".join(
+                 f"{e}: " + (f"{d['substeps_initial']} -> "
+                             if d.get("substeps_initial", d["substeps"]) != d["substeps"]
+                             else "")
+                 + f"{d['substeps']} ({d['chosen']}), "
                  + (f"{d['error_initial']:.2g} -> " if d.get("error_initial") is not None
                     else "")
-                 + (f"{d['error']:.2g}" if d.get("error") is not None else "not finite")
+                 + (f"{d['error']:.2g} = {d['error_std']:.2g} standard errors of the "
+                    f"estimates" if d.get("error_std") is not None else "not finite")
                  + f" (tolerance {d['tolerance']:g})"
                  for e, d in res.discretization.items()))
     for e, d in res.validation.items():

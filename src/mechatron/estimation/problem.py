@@ -388,6 +388,7 @@ class EstimationProblem:
                     problems.append(str(exc))
                     continue
                 b["error_initial"] = err
+                b["substeps_initial"] = m
             if traj is None or traj.jit != self._use_jit(e.n * m):
                 traj = self._trajectory(b, m, self._use_jit(e.n * m))
             try:
@@ -427,7 +428,7 @@ class EstimationProblem:
                     zip(self._signals(b, Yc), self._signals(b, Yf), b["noise"]))
         return math.sqrt(total) if math.isfinite(total) else math.inf
 
-    def _choose_by_error(self, b, p, x0, start: int):
+    def _choose_by_error(self, b, p, x0, start: int, std_scale: float = 1.0):
         """``(m, error, trajectory)``: the fewest substeps ``m >= start`` whose
         step-doubling estimate (``m`` against ``2m`` substeps, at the parameter vector
         ``p``) is at most ``substep_tol``. Doubles from the first ``m >= start`` that
@@ -447,7 +448,7 @@ class EstimationProblem:
                 cache[k] = self._trajectory(b, k)
             return cache[k]
 
-        tol = self.substep_tol
+        tol = self.substep_tol * std_scale
         errs = {}
         m = base
         while True:
@@ -460,7 +461,9 @@ class EstimationProblem:
                 raise DataError(
                     f"{e.where('t')}: experiment '{e.name}': with {m} Radau substeps per "
                     f"sample the discretization error estimate (against {2 * m}) is "
-                    f"{shown}, above the tolerance substep_tol = {tol:g}; {2 * m} "
+                    f"{shown}, above the tolerance substep_tol = {self.substep_tol:g}"
+                    + (f" (x {std_scale:.3g}, the fit's standard errors over the noise's)"
+                       if std_scale != 1.0 else "") + f"; {2 * m} "
                     f"would exceed max_substeps = {top} (at most {MAX_SUBSTEPS}). "
                     f"Measure faster, raise max_substeps, give substeps yourself, or "
                     f"loosen substep_tol (the estimates may then be biased by the "
@@ -584,9 +587,13 @@ class EstimationProblem:
         return choose_substeps(float(np.diff(e.t).max()), tau, ratio=ratio,
                                max_substeps=max_substeps, where=e.where("t"))
 
-    def refine(self, theta, ratio: float = 1.0, max_substeps: int = 400) -> bool:
+    def refine(self, theta, ratio: float = 1.0, max_substeps: int = 400,
+               std_scale: float = 1.0) -> bool:
         """Re-choose the substeps for the parameters ``theta``; rebuild and return True
-        if any experiment needs more than it has (for accuracy at the solution)."""
+        if any experiment needs more than it has (for accuracy at the solution).
+        Substeps chosen from the error estimate are checked against ``substep_tol *
+        std_scale`` (``std_scale``: the fit's standard errors over the noise-level ones,
+        see :func:`std_scale`)."""
         values = dict(zip([f.name for f in self.free], theta[:len(self.free)]))
         changed = False
         for b in self.bound:
@@ -595,10 +602,10 @@ class EstimationProblem:
                 p, x0 = self._point(b, theta)
                 m = b["substeps"]
                 err = self._error_between(b, p, x0, b["traj"], self._trajectory(b, 2 * m))
-                if err <= self.substep_tol or 2 * m > self.max_substeps:
+                if err <= self.substep_tol * std_scale or 2 * m > self.max_substeps:
                     continue
                 try:
-                    m, err, _ = self._choose_by_error(b, p, x0, 2 * m)
+                    m, err, _ = self._choose_by_error(b, p, x0, 2 * m, std_scale)
                 except DataError as exc:
                     log.warning("estimate: %s", exc)
                     m = self.max_substeps
@@ -1066,7 +1073,9 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
                 break
         # the substeps were chosen at the starting values, coarse (L-stable steps); make
         # them fine enough at the solution, and polish the solution with them
-        if not refine or not prob.refine(to_theta(x), fine_ratio):
+        if not refine or not prob.refine(to_theta(x), fine_ratio,
+                                         std_scale=std_scale(prob, r, J, covariance,
+                                                             bandwidth)):
             break
         r, J = point(x)
         cost = float(r @ r)
@@ -1104,15 +1113,22 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
             "intervals assume white noise (covariance=\"white\"): they are too narrow. "
             "Use covariance=\"hac\".")
     disc = {}
+    # the bias bound ||e / sigma|| in the reported standard errors: divided by the
+    # residual level s and by how much wider these are than the white-noise ones
+    ratio = float(np.nanmin(std / std_white)) if np.all(std_white > 0) else 1.0
+    scale = math.sqrt(s2) * max(1.0, ratio if math.isfinite(ratio) else 1.0)
     for b, (name, err) in zip(prob.bound, prob.discretization_error(theta).items()):
+        rel = err / scale if scale > 0 else err
         disc[name] = {"substeps": int(b["substeps"]),
+                      "substeps_initial": int(b.get("substeps_initial", b["substeps"])),
                       "chosen": "error" if b.get("auto") else "given",
                       "error_initial": b.get("error_initial"),
                       "error": err if math.isfinite(err) else None,
+                      "error_std": rel if math.isfinite(rel) else None,
                       "tolerance": prob.substep_tol}
-        if not err <= prob.substep_tol:
+        if not rel <= prob.substep_tol:
             shown = "not finite (a Radau step did not converge)" if not math.isfinite(
-                err) else f"{err:.3g} standard errors"
+                rel) else f"{rel:.3g} standard errors of the estimates"
             warnings.append(
                 f"experiment '{name}': the discretization error estimate at the estimates "
                 f"is {shown} with {b['substeps']} substeps per sample (tolerance "
@@ -1153,6 +1169,29 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
         bandwidth_fraction=b, residual_rho1=rho1, warnings=warnings,
         profile_ci95=profile_ci, validation=validation_errors(prob, theta),
         flags=flags, discretization=disc)
+
+
+def std_scale(prob: EstimationProblem, r, J, covariance: str = "hac",
+              bandwidth=None) -> float:
+    """The fit's standard errors over those of the noise level the discretization error
+    is measured in: ``s`` (the residuals' level, 1 when ``sigma`` is right) times the
+    smallest ratio of the HAC to the white-noise standard errors (at least 1). A
+    discretization error ``E`` moves no estimate by more than ``E / std_scale`` of its
+    reported standard error."""
+    r = np.asarray(r, dtype=float)
+    J = np.asarray(J, dtype=float)
+    n, q = J.shape
+    s = math.sqrt(float(r @ r) / max(n - q, 1))
+    if covariance != "hac" or q == 0:
+        return max(s, 1e-300)
+    try:
+        white = s * s * np.linalg.pinv(J.T @ J)
+        cov, _b = hac_covariance(J, r, prob.residual_groups(), bandwidth=bandwidth)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = float(np.nanmin(np.sqrt(np.diag(cov) / np.diag(white))))
+    except (np.linalg.LinAlgError, ValueError):
+        ratio = 1.0
+    return max(s, 1e-300) * max(1.0, ratio if math.isfinite(ratio) else 1.0)
 
 
 def residual_rho1(prob: EstimationProblem, r: np.ndarray) -> dict:
