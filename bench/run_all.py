@@ -39,6 +39,7 @@ import bench_realtime
 import bench_scaling
 import bench_stiff_contact
 import bench_subsystems
+import bench_substeps
 
 BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
               "pwm": bench_pwm.run, "scaling": bench_scaling.run,
@@ -49,7 +50,8 @@ BENCHMARKS = {"import": bench_import.run, "dc_motor": bench_dc_motor.run,
               "events": bench_events.run,
               "stiff_contact": bench_stiff_contact.run,
               "explore": bench_explore.run, "fmu_import": bench_fmu_import.run,
-              "ladder_simulate": bench_ladder_simulate.run, "dask": bench_dask.run}
+              "ladder_simulate": bench_ladder_simulate.run, "dask": bench_dask.run,
+              "substeps": bench_substeps.run}
 
 #: Goals of issue 17 for the RC ladder: compile seconds by N, and simulation at least
 #: twice as fast as the SciPy peer (ratio peer / Mechatron >= 2) at these N.
@@ -379,6 +381,16 @@ def _rows_fmu_import(r: dict) -> list[dict]:
     return out
 
 
+def _rows_substeps(r: dict) -> list[dict]:
+    kink, smooth = r["kink_error_based"], r["smooth_error_based"]
+    ratio = r["kink_over_smooth_wall"]
+    return [_row(f"estimation over an fmin/fmax kink ({kink['substeps']} substeps, "
+                 "error-based), set-up + fit", "s", kink["wall_s"],
+                 f"smooth tanh twin ({smooth['substeps']} substeps)", smooth["wall_s"],
+                 smooth["wall_s"] / kink["wall_s"], "kink / smooth <= 10 (issue 19)",
+                 ratio <= 10)]
+
+
 TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_pwm,
               "scaling": _rows_scaling, "codegen": _rows_codegen,
               "realtime": _rows_realtime, "multibody": _rows_multibody,
@@ -387,7 +399,8 @@ TABLE_ROWS = {"import": _rows_import, "dc_motor": _rows_dc_motor, "pwm": _rows_p
               "subsystems": _rows_subsystems, "events": _rows_events,
               "stiff_contact": _rows_stiff_contact, "explore": _rows_explore,
               "fmu_import": _rows_fmu_import,
-              "ladder_simulate": _rows_ladder_simulate, "dask": _rows_dask}
+              "ladder_simulate": _rows_ladder_simulate, "dask": _rows_dask,
+              "substeps": _rows_substeps}
 
 
 def table(results: dict) -> list[dict]:

@@ -45,8 +45,13 @@ def test_estimate_example_generates_its_data_and_writes_its_report(capsys, examp
     assert (tmp_path / "out" / "estimate_fit.png").stat().st_size > 10000
     saved = json.loads((tmp_path / "out" / "estimate.json").read_text())
     assert saved["parameters"] == doc["parameters"]
+    # the substeps per experiment and their error estimate (see test_estimation_substeps)
+    assert set(doc["discretization"]) == {"locked_rotor", "multi_step"}
+    assert all(d["substeps"] >= 1 and d["error"] is not None
+               for d in doc["discretization"].values())
     code, out, err = run(capsys, "estimate", str(cfg), "--max-iterations", "1", "--quiet")
     assert code == 0 and "95% interval" in out and "NRMSE" in out and err == ""
+    assert "discretization (Radau substeps per sample" in out
 
 
 def test_sensitivity_example(capsys, example):

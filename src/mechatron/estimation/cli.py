@@ -129,6 +129,19 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         f"{e}: " + ", ".join(f"{lab} {v0:.3g} -> {v:.3g}"
                              for (lab, v), v0 in zip(d.items(), res.nrmse_initial[e].values()))
         for e, d in res.nrmse.items()))
+    if res.discretization:
+        emit("  discretization (Radau substeps per sample; step-doubling error estimate "
+             "in noise-level units, start -> estimates): " + "; ".join(
+                 f"{e}: " + (f"{d['substeps_initial']} -> "
+                             if d.get("substeps_initial", d["substeps"]) != d["substeps"]
+                             else "")
+                 + f"{d['substeps']} ({d['chosen']}), "
+                 + (f"{d['error_initial']:.2g} -> " if d.get("error_initial") is not None
+                    else "")
+                 + (f"{d['error']:.2g} = {d['error_std']:.2g} standard errors of the "
+                    f"estimates" if d.get("error_std") is not None else "not finite")
+                 + f" (tolerance {d['tolerance']:g})"
+                 for e, d in res.discretization.items()))
     for e, d in res.validation.items():
         emit(f"  validation on {e} (not fitted): " + "; ".join(
             f"{lab} RMSE {v['rmse']:.4g}, NRMSE {v['nrmse']:.3g}, relative error "

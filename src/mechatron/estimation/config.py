@@ -246,13 +246,20 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
         c.values("[fixed]", cfg["fixed"])
 
     opts = cfg.get("options", {})
-    if c.keys("[options]", opts, ("substeps", "jit", "smooth")):
+    if c.keys("[options]", opts, ("substeps", "jit", "smooth", "substep_tol",
+                                  "max_substeps")):
         if "substeps" in opts:
             from mechatron.estimation.problem import MAX_SUBSTEPS
             c.number("[options] substeps", opts["substeps"], integer=True, minimum=1,
                      maximum=MAX_SUBSTEPS)
         if "smooth" in opts:
             c.number("[options] smooth", opts["smooth"], positive=True)
+        if "substep_tol" in opts:
+            c.number("[options] substep_tol", opts["substep_tol"], positive=True)
+        if "max_substeps" in opts:
+            from mechatron.estimation.problem import MAX_SUBSTEPS
+            c.number("[options] max_substeps", opts["max_substeps"], integer=True,
+                     minimum=1, maximum=MAX_SUBSTEPS)
         if "jit" in opts and opts["jit"] not in (True, False, "auto"):
             c.add("[options] jit", f"must be true, false or \"auto\", got {opts['jit']!r}")
 
@@ -565,6 +572,8 @@ def build_estimation(cfg: dict, *, model=None):
                              free_x0=cfg.get("free_x0", []),
                              per_experiment=per_experiment(cfg),
                              substeps=opts.get("substeps"),
+                             substep_tol=opts.get("substep_tol", 0.1),
+                             max_substeps=opts.get("max_substeps", 400),
                              jit=opts.get("jit", "auto"), smooth=opts.get("smooth"),
                              validation=_experiments(cfg, "validation"))
 

@@ -78,7 +78,8 @@ from mechatron.errors import DataError, ModelError, SimulationError
 from mechatron.estimation.native import native
 from mechatron.solvers.fixed import NEWTON_ATOL, NEWTON_RTOL, NEWTON_STEP
 
-__all__ = ["Trajectory", "fastest_time_constant", "choose_substeps", "check_model"]
+__all__ = ["Trajectory", "fastest_time_constant", "choose_substeps", "check_model",
+           "noise_level", "grid_fits"]
 
 # Radau IIA, 3 stages (order 5)
 _S6 = math.sqrt(6.0)
@@ -263,6 +264,37 @@ def choose_substeps(h_max: float, tau_min: float, *, ratio: float = 1.0,
             f"follow this sample rate: measure faster, or raise max_substeps.",
             path=where)
     return m
+
+
+def noise_level(y) -> float:
+    """Noise level of a measured signal for the discretization error test: the robust
+    (median absolute deviation) standard deviation of its second differences divided by
+    sqrt(6), what white noise of that level gives; a smooth signal sampled finely adds
+    little to it. At least 1e-4 of the signal's range (a 14-bit sensor: noise-free or
+    quantized data would otherwise ask for an error no data can show)."""
+    y = np.asarray(y, dtype=float)
+    span = float(np.ptp(y)) if y.size else 0.0
+    floor = 1e-4 * span if span > 0 else 1e-12
+    if y.size < 5:
+        return max(span, floor)
+    d = np.diff(y, 2)
+    mad = float(np.median(np.abs(d - np.median(d))))
+    return max(1.4826 * mad / math.sqrt(6.0), floor)
+
+
+def grid_fits(cm: CompiledModel, t, m: int, p, input_index=()) -> bool:
+    """Whether every clock tick and time-relation switch of ``cm`` falls on a substep end
+    of the sample grid ``t`` with ``m`` substeps (see :meth:`Trajectory.check_ticks`),
+    without building the step functions."""
+    probe = object.__new__(Trajectory)
+    probe.cm, probe.t, probe.substeps = cm, np.asarray(t, dtype=float), int(m)
+    probe.input_index = list(input_index)
+    probe.events = bool(cm.nr) and cm.f_events is not None
+    try:
+        probe.check_ticks(p)
+    except DataError:
+        return False
+    return True
 
 
 @dataclass

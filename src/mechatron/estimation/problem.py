@@ -55,7 +55,7 @@ import numpy as np
 import mechatron as mt
 from mechatron._io import save_figure
 from mechatron.compiler.compiled import CompiledModel
-from mechatron.errors import DataError, ParameterError
+from mechatron.errors import DataError, ParameterError, SimulationError
 from mechatron.estimation.bounds import at_bounds, check_bounds, describe_at_bounds
 from mechatron.estimation.data import unit_factor
 from mechatron.estimation.delays import prepare_delays, shift
@@ -64,7 +64,7 @@ from mechatron.estimation.native import compiler
 from mechatron.estimation.uncertainty import (RHO_WARN, acf, bartlett_critical, diagnose,
                                               hac_covariance, profile_interval)
 from mechatron.estimation.discretize import (Trajectory, check_model, choose_substeps,
-                                             fastest_time_constant)
+                                             fastest_time_constant, grid_fits, noise_level)
 
 log = logging.getLogger(__name__)
 
@@ -144,8 +144,17 @@ class EstimationProblem:
         variable is ``"<experiment>:<parameter>"``. The start value defaults to the
         experiment's ``params``, then to ``fixed`` and the model's value.
     substeps : int or None
-        Radau substeps per sample; ``None`` chooses them from the fastest time constant at
-        the starting values (at most ``max_substeps``).
+        Radau substeps per sample; ``None`` chooses, per experiment, the fewest whose
+        step-doubling error estimate at the starting values is below ``substep_tol``
+        (at most ``max_substeps``, itself at most :data:`MAX_SUBSTEPS`); the estimate is
+        checked again at the solution (see :meth:`discretization_error`).
+    substep_tol : float
+        Tolerance of that estimate: ``||(y_m - y_2m) / sigma||_2`` over the samples and
+        outputs of an experiment, ``sigma`` the noise level of each output (given, else
+        estimated from the data by :func:`~.discretize.noise_level`). A systematic error
+        ``e`` moves the weighted least-squares estimates by at most ``||e / sigma||``
+        standard errors (white-noise metric), so the default 0.1 bounds the bias the
+        discretization adds to a tenth of the statistical uncertainty.
     jit : bool or "auto"
         Compile the step functions to native code (see :mod:`.native`).
     smooth : float or None
@@ -160,7 +169,18 @@ class EstimationProblem:
     def __init__(self, model, experiments, free, *, inputs=None, outputs=None, fixed=None,
                  offsets=(), free_x0=(), per_experiment=None, input_delays=None,
                  substeps=None, max_substeps: int = 400,
-                 step_ratio: float = 4.0, jit="auto", smooth=None, validation=()):
+                 step_ratio: float = 4.0, jit="auto", smooth=None, validation=(),
+                 substep_tol: float = 0.1):
+        if not (isinstance(substep_tol, (int, float)) and math.isfinite(substep_tol)
+                and substep_tol > 0):
+            raise ParameterError(f"estimation: substep_tol must be a number > 0, got "
+                                 f"{substep_tol!r}.")
+        if not (isinstance(max_substeps, (int, np.integer)) and
+                1 <= max_substeps <= MAX_SUBSTEPS):
+            raise ParameterError(f"estimation: max_substeps must be a whole number from 1 "
+                                 f"to {MAX_SUBSTEPS}, got {max_substeps!r}.")
+        self.substep_tol = float(substep_tol)
+        self.max_substeps = int(max_substeps)
         for m in (substeps if isinstance(substeps, (list, tuple)) else [substeps]):
             if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer))
                                   or m < 1):
@@ -195,7 +215,7 @@ class EstimationProblem:
                           per_experiment=self.per_experiment,
                           input_delays=self.input_delays,
                           max_substeps=max_substeps, step_ratio=step_ratio, jit=jit,
-                          smooth=smooth)
+                          smooth=smooth, substep_tol=substep_tol)
         pindex = {n: i for i, n in enumerate(cm.param_names)}
         problems = []
         for f in self.free:
@@ -317,9 +337,10 @@ class EstimationProblem:
                 problems.append(str(exc))
                 continue
             Ym = np.array([e.outputs[lab] * f for lab, f in zip(out_labels, fout)])
-            sig = []
+            sig, noise = [], []
             for lab, f, y in zip(out_labels, fout, Ym):
                 s = e.sigma.get(lab)
+                noise.append(s * f if s else noise_level(y))
                 s = s * f if s else float(np.ptp(y)) or 1.0
                 sig.append(s)
             pe = self.base.copy()
@@ -338,10 +359,12 @@ class EstimationProblem:
                 x0[cm.state_names.index(key)] = val
             m = substeps[len(self.bound)] if isinstance(substeps, (list, tuple)) \
                 else substeps
-            if m is None:
+            auto = m is None
+            if auto:
                 try:
-                    m = self._substeps(e, pe, x0, U, in_labels, self._start_values(),
-                                       step_ratio, max_substeps)
+                    # the time constants' rule refuses a rate the model cannot follow
+                    self._substeps(e, pe, x0, U, in_labels, self._start_values(),
+                                   step_ratio, max_substeps)
                 except DataError as exc:
                     problems.append(str(exc))
                     continue
@@ -349,22 +372,128 @@ class EstimationProblem:
                 self._check_informative()        # before the first (compiled) trajectory
             paths = list(dict.fromkeys(p for lab in out_labels
                                        for p in self._outspec[lab].paths))
-            traj = Trajectory(cm, e.t, [pindex[self.inputs[lab]] for lab in in_labels],
-                              [cm.names.index(p) for p in paths],
-                              substeps=m, hold=e.hold, jit=self._use_jit(e.n * m),
-                              smooth=self.smooth)
+            rows = [[paths.index(p) for p in self._outspec[lab].paths] for lab in out_labels]
+            b = dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), noise=np.array(noise), p=pe,
+                     x0=x0, out_labels=out_labels, out_rows=rows, in_labels=in_labels,
+                     in_index=[pindex[self.inputs[lab]] for lab in in_labels],
+                     out_index=[cm.names.index(p) for p in paths], auto=auto)
+            traj = None
+            if auto:
+                pp = pe.copy()
+                for name, v in self._start_values().items():
+                    pp[pindex[name]] = v
+                try:
+                    m, err, traj = self._choose_by_error(b, pp, x0, 1)
+                except (DataError, SimulationError) as exc:
+                    problems.append(str(exc))
+                    continue
+                b["error_initial"] = err
+                b["substeps_initial"] = m
+            if traj is None or traj.jit != self._use_jit(e.n * m):
+                traj = self._trajectory(b, m, self._use_jit(e.n * m))
             try:
                 traj.check_ticks(pe)
             except DataError as exc:
                 problems.append(f"{e.source}: experiment '{e.name}': {exc}")
                 continue
-            rows = [[paths.index(p) for p in self._outspec[lab].paths] for lab in out_labels]
-            self.bound.append(dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), p=pe, x0=x0,
-                                   traj=traj, out_labels=out_labels, substeps=m,
-                                   out_rows=rows, in_labels=in_labels))
+            b.update(traj=traj, substeps=m)
+            self.bound.append(b)
         if problems:
             raise DataError(" ".join(problems), problems=problems)
         self._build_residual()
+
+    def _trajectory(self, b, m: int, jit: bool = False) -> Trajectory:
+        e = b["exp"]
+        return Trajectory(self.cm, e.t, b["in_index"], b["out_index"], substeps=int(m),
+                          hold=e.hold, jit=jit, smooth=self.smooth)
+
+    def _signals(self, b, Y) -> list:
+        """The model signals compared with the data (rates as increments per sample)."""
+        out = []
+        dt = np.diff(b["exp"].t)
+        for r, lab in enumerate(b["out_labels"]):
+            y, _ = self._label_output(b, r, Y)
+            out.append(np.diff(y) / dt if self._outspec[lab][1] == "rate" else y)
+        return out
+
+    def _error_between(self, b, p, x0, coarse, fine) -> float:
+        """``||(y_coarse - y_fine) / noise||_2`` over the samples and outputs of ``b``
+        (inf when a Radau step does not converge or the result is not finite)."""
+        try:
+            Yc, _ = coarse(p, x0, b["U"])
+            Yf, _ = fine(p, x0, b["U"])
+        except SimulationError:
+            return math.inf
+        total = sum(float(np.sum(((a - c) / n) ** 2)) for a, c, n in
+                    zip(self._signals(b, Yc), self._signals(b, Yf), b["noise"]))
+        return math.sqrt(total) if math.isfinite(total) else math.inf
+
+    def _choose_by_error(self, b, p, x0, start: int, std_scale: float = 1.0):
+        """``(m, error, trajectory)``: the fewest substeps ``m >= start`` whose
+        step-doubling estimate (``m`` against ``2m`` substeps, at the parameter vector
+        ``p``) is at most ``substep_tol``. Doubles from the first ``m >= start`` that
+        puts every clock tick on a substep end, then tries a count between the last two
+        (predicted from the observed order, checked against the ``2m`` solution)."""
+        e = b["exp"]
+        top = self.max_substeps
+        base = int(start)
+        while base <= top and not grid_fits(self.cm, e.t, base, p, b["in_index"]):
+            base += 1
+        if base > top:
+            base = int(start)                  # check_ticks reports it
+        cache = {}
+
+        def traj(k):
+            if k not in cache:
+                cache[k] = self._trajectory(b, k)
+            return cache[k]
+
+        tol = self.substep_tol * std_scale
+        errs = {}
+        m = base
+        while True:
+            errs[m] = self._error_between(b, p, x0, traj(m), traj(2 * m))
+            if errs[m] <= tol:
+                break
+            if 2 * m > top:
+                shown = "did not converge" if math.isinf(errs[m]) else \
+                    f"{errs[m]:.3g} standard errors"
+                raise DataError(
+                    f"{e.where('t')}: experiment '{e.name}': with {m} Radau substeps per "
+                    f"sample the discretization error estimate (against {2 * m}) is "
+                    f"{shown}, above the tolerance substep_tol = {self.substep_tol:g}"
+                    + (f" (x {std_scale:.3g}, the fit's standard errors over the noise's)"
+                       if std_scale != 1.0 else "") + f"; {2 * m} "
+                    f"would exceed max_substeps = {top} (at most {MAX_SUBSTEPS}). "
+                    f"Measure faster, raise max_substeps, give substeps yourself, or "
+                    f"loosen substep_tol (the estimates may then be biased by the "
+                    f"discretization).", path=e.where("t"))
+            m *= 2
+        lo = m // 2
+        if lo >= base and lo in errs and math.isfinite(errs[lo]) and errs[lo] > tol \
+                and m - lo > 1:
+            order = math.log2(errs[lo] / errs[m]) if errs[m] > 0 else 5.0
+            order = min(max(order, 1.0), 6.0)
+            mc = math.ceil(lo * (errs[lo] / (0.7 * tol)) ** (1.0 / order))
+            while mc < m and not grid_fits(self.cm, e.t, mc, p, b["in_index"]):
+                mc += 1
+            if lo < mc < m:
+                err = self._error_between(b, p, x0, traj(mc), traj(2 * m))
+                if err <= tol:
+                    return mc, err, traj(mc)
+        return m, errs[m], traj(m)
+
+    def discretization_error(self, theta) -> dict:
+        """Step-doubling estimate of the discretization error of each experiment at
+        ``theta`` (its substeps against twice as many), in standard errors:
+        ``{experiment: error}``; compare with ``substep_tol``."""
+        theta = np.asarray(theta, dtype=float)
+        out = {}
+        for b in self.bound:
+            p, x0 = self._point(b, theta)
+            fine = self._trajectory(b, 2 * b["substeps"])
+            out[b["exp"].name] = self._error_between(b, p, x0, b["traj"], fine)
+        return out
 
     def _check_informative(self) -> None:
         """A :class:`DataError` when every measured output of every experiment is zero:
@@ -458,12 +587,33 @@ class EstimationProblem:
         return choose_substeps(float(np.diff(e.t).max()), tau, ratio=ratio,
                                max_substeps=max_substeps, where=e.where("t"))
 
-    def refine(self, theta, ratio: float = 1.0, max_substeps: int = 400) -> bool:
+    def refine(self, theta, ratio: float = 1.0, max_substeps: int = 400,
+               std_scale: float = 1.0) -> bool:
         """Re-choose the substeps for the parameters ``theta``; rebuild and return True
-        if any experiment needs more than it has (for accuracy at the solution)."""
+        if any experiment needs more than it has (for accuracy at the solution).
+        Substeps chosen from the error estimate are checked against ``substep_tol *
+        std_scale`` (``std_scale``: the fit's standard errors over the noise-level ones,
+        see :func:`std_scale`)."""
         values = dict(zip([f.name for f in self.free], theta[:len(self.free)]))
         changed = False
         for b in self.bound:
+            if b.get("auto"):
+                # chosen from the error estimate: check it at theta, and double as needed
+                p, x0 = self._point(b, theta)
+                m = b["substeps"]
+                err = self._error_between(b, p, x0, b["traj"], self._trajectory(b, 2 * m))
+                if err <= self.substep_tol * std_scale or 2 * m > self.max_substeps:
+                    continue
+                try:
+                    m, err, _ = self._choose_by_error(b, p, x0, 2 * m, std_scale)
+                except DataError as exc:
+                    log.warning("estimate: %s", exc)
+                    m = self.max_substeps
+                b["traj"] = self._trajectory(b, m, self._use_jit(b["exp"].n * m))
+                b["traj"].check_ticks(b["p"])
+                b["substeps"] = m
+                changed = True
+                continue
             m = self._substeps(b["exp"], b["p"], b["x0"], b["U"], b["in_labels"],
                                values, ratio, max_substeps, traj=b["traj"])
             if m > b["substeps"]:
@@ -681,6 +831,11 @@ class EstimationResult:
     #: :func:`identifiability`): zero, without influence on the outputs, or with a
     #: standard deviation above the estimate.
     flags: dict = field(default_factory=dict)
+    #: Per experiment: ``substeps`` per sample, ``chosen`` (``"error"`` from the error
+    #: estimate, or ``"given"``), the step-doubling error estimate in standard errors at
+    #: the start (``error_initial``, when chosen) and at the estimates (``error``), and
+    #: the ``tolerance`` (see :class:`EstimationProblem`'s ``substep_tol``).
+    discretization: dict = field(default_factory=dict)
 
     @property
     def parameters(self) -> dict:
@@ -705,6 +860,7 @@ class EstimationResult:
                 "cost_initial": self.cost_initial, "cost": self.cost,
                 "nrmse": self.nrmse, "nrmse_initial": self.nrmse_initial,
                 "validation": self.validation,
+                "discretization": self.discretization,
                 "iterations": self.iterations, "evaluations": self.evaluations,
                 "wall_time_s": self.wall_time, "success": self.success,
                 "message": self.message,
@@ -917,7 +1073,9 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
                 break
         # the substeps were chosen at the starting values, coarse (L-stable steps); make
         # them fine enough at the solution, and polish the solution with them
-        if not refine or not prob.refine(to_theta(x), fine_ratio):
+        if not refine or not prob.refine(to_theta(x), fine_ratio,
+                                         std_scale=std_scale(prob, r, J, covariance,
+                                                             bandwidth)):
             break
         r, J = point(x)
         cost = float(r @ r)
@@ -954,6 +1112,29 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
             f"{k} {v:.2f}" for k, v in rho1.items() if v > RHO_WARN) + ") but the "
             "intervals assume white noise (covariance=\"white\"): they are too narrow. "
             "Use covariance=\"hac\".")
+    disc = {}
+    # the bias bound ||e / sigma|| in the reported standard errors: divided by the
+    # residual level s and by how much wider these are than the white-noise ones
+    ratio = float(np.nanmin(std / std_white)) if np.all(std_white > 0) else 1.0
+    scale = math.sqrt(s2) * max(1.0, ratio if math.isfinite(ratio) else 1.0)
+    for b, (name, err) in zip(prob.bound, prob.discretization_error(theta).items()):
+        rel = err / scale if scale > 0 else err
+        disc[name] = {"substeps": int(b["substeps"]),
+                      "substeps_initial": int(b.get("substeps_initial", b["substeps"])),
+                      "chosen": "error" if b.get("auto") else "given",
+                      "error_initial": b.get("error_initial"),
+                      "error": err if math.isfinite(err) else None,
+                      "error_std": rel if math.isfinite(rel) else None,
+                      "tolerance": prob.substep_tol}
+        if not rel <= prob.substep_tol:
+            shown = "not finite (a Radau step did not converge)" if not math.isfinite(
+                rel) else f"{rel:.3g} standard errors of the estimates"
+            warnings.append(
+                f"experiment '{name}': the discretization error estimate at the estimates "
+                f"is {shown} with {b['substeps']} substeps per sample (tolerance "
+                f"{prob.substep_tol:g}): the estimates may be biased by the "
+                f"discretization. Give more substeps (or substeps = None to choose them "
+                f"from the error), or raise max_substeps.")
     for w in warnings:
         log.warning("estimate: %s", w, extra={"in_summary": True})
     profile_ci = {}
@@ -987,7 +1168,30 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
         covariance=covariance, std_white=std_white, ci95_white=ci_white,
         bandwidth_fraction=b, residual_rho1=rho1, warnings=warnings,
         profile_ci95=profile_ci, validation=validation_errors(prob, theta),
-        flags=flags)
+        flags=flags, discretization=disc)
+
+
+def std_scale(prob: EstimationProblem, r, J, covariance: str = "hac",
+              bandwidth=None) -> float:
+    """The fit's standard errors over those of the noise level the discretization error
+    is measured in: ``s`` (the residuals' level, 1 when ``sigma`` is right) times the
+    smallest ratio of the HAC to the white-noise standard errors (at least 1). A
+    discretization error ``E`` moves no estimate by more than ``E / std_scale`` of its
+    reported standard error."""
+    r = np.asarray(r, dtype=float)
+    J = np.asarray(J, dtype=float)
+    n, q = J.shape
+    s = math.sqrt(float(r @ r) / max(n - q, 1))
+    if covariance != "hac" or q == 0:
+        return max(s, 1e-300)
+    try:
+        white = s * s * np.linalg.pinv(J.T @ J)
+        cov, _b = hac_covariance(J, r, prob.residual_groups(), bandwidth=bandwidth)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = float(np.nanmin(np.sqrt(np.diag(cov) / np.diag(white))))
+    except (np.linalg.LinAlgError, ValueError):
+        ratio = 1.0
+    return max(s, 1e-300) * max(1.0, ratio if math.isfinite(ratio) else 1.0)
 
 
 def residual_rho1(prob: EstimationProblem, r: np.ndarray) -> dict:
