@@ -925,31 +925,21 @@ def validation_errors(prob: EstimationProblem, theta, experiments=None) -> dict:
     """Simulate ``experiments`` (default: ``prob.validation``) with the free parameters
     and offsets at ``theta`` and compare with their measurements, per experiment and
     output: ``rmse`` (model unit), ``nrmse`` (as the fit), ``fit_pct`` ``100 (1 -
-    nrmse)`` and ``relerr_pct`` ``100 ||ym - y|| / ||ym||``. Their own initial states
-    are used (``free_x0`` is not estimated for them)."""
+    nrmse)`` and ``relerr_pct`` ``100 ||ym - y|| / ||ym||``: the figures of
+    :func:`~mechatron.estimation.validation.validate`, with the runs' own initial states
+    (nothing fitted again) and the fit's substeps."""
+    from mechatron.estimation.validation import validate
     experiments = prob.validation if experiments is None else list(experiments)
     if not experiments:
         return {}
-    theta = np.asarray(theta, dtype=float)
-    nf, no = len(prob.free), len(prob.offsets)
-    free = [FreeParameter(f.name, float(v), f.min, f.max, f.scale)
-            for f, v in zip(prob.free, theta[:nf])]
     m = max(b["substeps"] for b in prob.bound)
-    other = EstimationProblem(prob.cm, experiments, free,
-                              **dict(prob._init, free_x0=(), per_experiment={},
-                                     substeps=[m] * len(experiments)))
-    sims = other.simulate(np.concatenate([theta[:nf + no]]))
-    out = {}
-    for b, sim in zip(other.bound, sims):
-        d = {}
-        for k, lab in enumerate(b["out_labels"]):
-            ym, y = b["Ym"][k], sim[lab]
-            err = float(np.linalg.norm(ym - y))
-            nrmse = err / (np.linalg.norm(ym - ym.mean()) or 1.0)
-            d[lab] = {"rmse": err / np.sqrt(ym.size), "nrmse": nrmse,
-                      "fit_pct": 100 * (1 - nrmse),
-                      "relerr_pct": 100 * err / (np.linalg.norm(ym) or 1.0)}
-        out[b["exp"].name] = d
+    rep = validate(dict(zip(prob.names, map(float, theta))), experiments, problem=prob,
+                   refit=False, substeps=[m] * len(experiments))
+    out: dict = {}
+    for r in rep.rows:
+        out.setdefault(r["experiment"], {})[r["signal"]] = {
+            "rmse": r["rmse"], "nrmse": r["nrmse"], "fit_pct": r["fit_percent"],
+            "relerr_pct": r["relerr_percent"]}
     return out
 
 

@@ -46,7 +46,7 @@ class ValidationReport:
     """Figures of a simulated model against measured data (see the module docstring).
 
     ``rows``: one dict per experiment and output with ``experiment``, ``signal``, ``n``,
-    ``rmse``, ``nrmse``, ``fit_percent``, ``rho1`` (lag-1 autocorrelation of the error),
+    ``rmse``, ``nrmse``, ``fit_percent``, ``relerr_percent`` (``100 ||e|| / ||ym||``), ``rho1`` (lag-1 autocorrelation of the error),
     ``acf_outside`` / ``ccf_outside`` (fraction of lags 1..lags, resp. -lags..lags,
     outside the 95% band) and ``max_ccf`` (largest absolute cross-correlation with an
     input)."""
@@ -112,7 +112,8 @@ class ValidationReport:
 
 
 def validate(result, experiments=None, *, label: str | None = None, lags: int = 25,
-             per_experiment=None, refit: bool = True, problem=None) -> ValidationReport:
+             per_experiment=None, refit: bool = True, problem=None,
+             substeps=None) -> ValidationReport:
     """Simulate the fitted model of ``result`` on ``experiments`` and report the fit.
 
     Parameters
@@ -131,6 +132,9 @@ def validate(result, experiments=None, *, label: str | None = None, lags: int = 
     refit : bool
         Fit the run-specific unknowns (``free_x0`` of the problem, ``per_experiment``)
         on the validation data; False keeps their start values.
+    substeps : int or list of int, optional
+        Substeps per sample of the validation runs (default: chosen from the error
+        estimate, as for a fit).
     """
     from mechatron.estimation.problem import EstimationProblem
     if isinstance(result, dict):
@@ -157,7 +161,8 @@ def validate(result, experiments=None, *, label: str | None = None, lags: int = 
     vprob = EstimationProblem(prob.cm, list(experiments), [], inputs=prob.inputs,
                               outputs=prob.outputs, fixed={**prob.fixed, **shared},
                               free_x0=free_x0, per_experiment=per, jit=prob.jit,
-                              input_delays=prob.input_delays)
+                              input_delays=prob.input_delays, smooth=prob.smooth,
+                              substeps=substeps)
     refitted = []
     theta = vprob.initial
     if refit and vprob.names:
@@ -209,7 +214,10 @@ def _report(prob, theta, label, lags, params, refitted, offsets=None) -> Validat
             c = {il: ccf(err, e.inputs[il][first:], L) for il in prob.inputs}
             rows.append(dict(experiment=e.name, signal=lab, n=int(err.size),
                              rmse=float(np.sqrt(np.mean(err ** 2))), nrmse=nrmse,
-                             fit_percent=100.0 * (1.0 - nrmse), rho1=float(a[1]),
+                             fit_percent=100.0 * (1.0 - nrmse),
+                             relerr_percent=100.0 * float(np.linalg.norm(err))
+                             / (float(np.linalg.norm(ym[first:])) or 1.0),
+                             rho1=float(a[1]),
                              acf_outside=float(np.mean(np.abs(a[1:]) > band)),
                              ccf_outside=float(np.mean([np.mean(np.abs(v) > band)
                                                         for v in c.values()]))
