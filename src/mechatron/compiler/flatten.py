@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
+from mechatron.compiler.folding import fold_sets, foldable_ports
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
 from mechatron.core.connections import (connection_sets, inside_connected, is_driver,
                                         port_key)
@@ -69,6 +70,18 @@ class FlatVariable:
     state_select: str = "default"   # "avoid" / "default" / "prefer" (state selection hint)
 
 
+class FoldedPort:
+    """A folded subsystem port: its across variables equal those of the node's first
+    member ``node``; its through variables are the signed sums ``flow`` ``{member
+    path: coefficient}`` of the members' through variables."""
+
+    __slots__ = ("path", "cls", "node", "flow", "position")
+
+    def __init__(self, path, cls, node, flow, position):
+        self.path, self.cls, self.node, self.flow = path, cls, node, flow
+        self.position = position    # how many model variables were declared before it
+
+
 @dataclass
 class FlatEquation:
     residual: ca.SX
@@ -100,6 +113,27 @@ class FlatModel:
     discrete: dict = field(default_factory=dict)
     #: Equations of ``initial_equations()``, holding at the initial time only.
     initial_equations: list = field(default_factory=list)
+    #: Subsystem ports folded into the nodes they join (:mod:`mechatron.compiler.folding`):
+    #: their variables are never unknowns, and are logged from their node.
+    folded: list["FoldedPort"] = field(default_factory=list)
+
+    def folded_variables(self):
+        """``(name, unit, doc, position, terms)`` of each variable of a folded port: the
+        signed sum ``terms`` ``[(variable name, coefficient)]`` of the model's variables,
+        logged after the first ``position`` variables of the model."""
+        for port in self.folded:
+            plan = _declaration_plan(port.cls)[1]
+            for key, kind, unit, doc, *_ in plan:
+                if kind == "across":
+                    terms = [(f"{port.node}.{key}", 1.0)]
+                else:
+                    terms = [(f"{path}.{key}", c) for path, c in port.flow.items()]
+                yield f"{port.path}.{key}", unit, doc, port.position, terms
+
+    @property
+    def n_folded(self) -> int:
+        """How many variables the folded ports hold."""
+        return sum(len(_declaration_plan(port.cls)[1]) for port in self.folded)
 
     @property
     def time(self) -> ca.SX:
@@ -181,19 +215,20 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     flat = FlatModel(name=name, context=BuildContext())
     problems = _Problems()
     elements = list(_walk(model))
+    prefetched, folded = foldable_ports(model, elements)
     for el in elements:
         if isinstance(el, Component) and el._partial and el is not model:
             problems.append(f"{el.describe()}: {type(el).__name__} is a partial class "
                             "(an interface); use a concrete component.")
         if isinstance(el, Component):
             flat.components[el.path] = type(el).__name__
-    _bind_symbols(flat, elements, problems)
+    _bind_symbols(flat, elements, problems, folded)
     _external_inputs(flat, model)
     try:
         with flat.context:
-            connects = _collect_equations(flat, elements, problems)
+            connects = _collect_equations(flat, elements, problems, prefetched)
             _discrete_declarations(flat, elements, problems)
-        _connections(flat, model, elements, connects, problems)
+        _connections(flat, model, elements, connects, problems, folded)
     finally:
         for el in elements:
             el._syms = None
@@ -236,11 +271,16 @@ def _summary(name: str, problems: list[str]) -> str:
     return f"model '{name}': {len(problems)} problems:\n  " + "\n  ".join(problems)
 
 
-def _bind_symbols(flat: FlatModel, elements, problems) -> None:
+def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
+    """Bind a CasADi symbol to every parameter and variable; ports in ``folded`` get a
+    mapping that binds them on first read (see `_FoldedSymbols`) instead."""
     ctx = flat.context
     values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
     variables, unknowns = flat.variables, ctx.unknowns
     for el in elements:
+        if folded and id(el) in folded:
+            el._syms = _FoldedSymbols(flat, el, folded, problems)
+            continue
         syms = {}
         own_values = values[id(el)] = {}
         owner = el._parent if isinstance(el, Connector) else el
@@ -270,21 +310,49 @@ def _bind_symbols(flat: FlatModel, elements, problems) -> None:
             own_values[key] = value
             flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
                                                   owner_path, (decl.min, decl.max))
-        starts = el._starts
-        for key, kind, unit, doc, start, priority, hint, select in plain:
-            path = prefix + key
-            sym = syms[key] = ca.SX.sym(path)
-            given = starts.get(key) if starts else None
-            if isinstance(given, Start):
-                try:
-                    start = to_si(given.value, unit, path)
-                except UnitError as exc:
-                    problems.add(UnitError, str(exc))
-                priority = given.priority
-            variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path, start,
-                                           priority, hint, select)
-            unknowns[path] = sym
+        _bind_variables(flat, el, syms, prefix, owner_path, plain, problems)
         el._syms = syms
+
+
+def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None:
+    variables, unknowns = flat.variables, flat.context.unknowns
+    starts = el._starts
+    for key, kind, unit, doc, start, priority, hint, select in plain:
+        path = prefix + key
+        sym = syms[key] = ca.SX.sym(path)
+        given = starts.get(key) if starts else None
+        if isinstance(given, Start):
+            try:
+                start = to_si(given.value, unit, path)
+            except UnitError as exc:
+                problems.add(UnitError, str(exc))
+            priority = given.priority
+        variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path, start,
+                                       priority, hint, select)
+        unknowns[path] = sym
+
+
+class _FoldedSymbols(dict):
+    """The symbols of a port that may be folded (:mod:`mechatron.compiler.folding`):
+    empty until an equation reads one, which binds the port's variables as any other
+    port's and takes it off the folded ports."""
+
+    def __init__(self, flat, port, folded, problems):
+        super().__init__()
+        self._args = (flat, port, folded, problems)
+        self.position = len(flat.variables)
+
+    def unfold(self) -> None:
+        flat, port, folded, problems = self._args
+        if folded.pop(id(port), None) is None:
+            return
+        _, plain = _declaration_plan(type(port))
+        _bind_variables(flat, port, self, f"{port.path}.", port._parent.path, plain,
+                        problems)
+
+    def __missing__(self, key):
+        self.unfold()
+        return dict.__getitem__(self, key)
 
 
 @functools.lru_cache(maxsize=None)
@@ -322,8 +390,7 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
         problems.append(f"{where()} refers to parameters of an enclosing component, but "
                         f"{el.describe()} has none. Give {key} a value.")
         return ca.SX.nan(), float("nan")
-    decls = type(parent)._declarations
-    missing = [n for n in expr.names if not isinstance(decls.get(n), Parameter)]
+    missing = _missing_parameters(expr, type(parent))
     if missing:
         problems.append(f"{where()}: {', '.join(missing)} is not a parameter of "
                         f"{parent.describe()}. Pass on parameters of the class whose body "
@@ -333,10 +400,14 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
     if message:
         problems.add(UnitError, f"{where()}: {message}")
         return ca.SX.nan(), float("nan")
-    sym = expr.evaluate(lambda n: parent._syms[n])
-    sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
     pvals = values.get(id(parent), {})
-    value = float(expr.evaluate(lambda n: pvals.get(n, float("nan"))))
+    name = _plain_reference(expr)
+    if name is not None:            # R=R: the parent's symbol and value themselves
+        sym, value = parent._syms[name], float(pvals.get(name, float("nan")))
+    else:
+        sym = expr.evaluate(lambda n: parent._syms[n])
+        sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
+        value = float(expr.evaluate(lambda n: pvals.get(n, float("nan"))))
     _check_range(el, key, decl, value, problems)
     flat.bound_parameters[path] = BoundParameter(
         path, sym, value, decl.unit, decl.doc, el.path,
@@ -345,6 +416,37 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
 
 
 _TEXTS: dict = {}
+_MISSING: dict = {}
+
+
+def _missing_parameters(expr, parent_cls) -> list:
+    """The names ``expr`` reads that are not parameters of ``parent_cls`` (once per
+    expression and class; the entry holds ``expr`` so that its id stays unique)."""
+    key = (id(expr), parent_cls)
+    got = _MISSING.get(key)
+    if got is None:
+        decls = parent_cls._declarations
+        got = _MISSING[key] = (expr, [n for n in expr.names
+                                      if not isinstance(decls.get(n), Parameter)])
+    return got[1]
+
+
+def _plain_reference(expr):
+    """The parent parameter's name if ``expr`` is that parameter itself (``R=R``), else
+    None; read once per expression from what it evaluates to."""
+    got = _TEXTS.get(("plain", id(expr)))
+    if got is None:
+        names = expr.names
+        name = None
+        if len(names) == 1:
+            marker = object()
+            try:
+                if expr.evaluate(lambda n: marker) is marker:
+                    name = names[0]
+            except TypeError:       # arithmetic on the marker: an expression
+                pass
+        got = _TEXTS[("plain", id(expr))] = (expr, name)
+    return got[1]
 
 
 def _expression_text(expr) -> str:
@@ -427,13 +529,21 @@ def _class_calls(el, method: str, where: str):
         yield klass, items
 
 
-def _collect_equations(flat: FlatModel, elements, problems) -> list[tuple[Connect, str]]:
+def _collect_equations(flat: FlatModel, elements, problems,
+                       prefetched=None) -> list[tuple[Connect, str]]:
     connects = []
     templates: dict = {}           # class -> _Template, or None where none applies
     for el in elements:
         if not isinstance(el, Component):
             continue
         where = el.path or flat.name
+        calls = prefetched.get(id(el)) if prefetched else None
+        if calls is not None:       # connections only, read before binding (folding)
+            if any(klass is type(el) for klass, _ in calls):
+                flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
+            for _, items in calls:
+                connects.extend((item, el) for item in _as_equations(items))
+            continue
         tpl = _template(flat, el, templates)
         if tpl is not None:
             if "equations" in vars(type(el)):
@@ -794,9 +904,10 @@ def _resolve(flat: FlatModel, port, sym_owner):
     return None
 
 
-def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
+def _connections(flat: FlatModel, model, elements, connects, problems, folded=None) -> None:
     """Connection sets over the whole tree, with inside and outside connectors
-    (:mod:`mechatron.core.connections`), turned into aliases and flow sums."""
+    (:mod:`mechatron.core.connections`), turned into aliases and flow sums; the ports
+    ``folded`` join their sets into one node (:mod:`mechatron.compiler.folding`)."""
     sym_owner: dict[str, SignalRef] = {}
     for el in elements:
         for key, decl in type(el)._declarations.items():
@@ -825,18 +936,30 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
         if len(ok) > 1:
             joined.append((writer, ok))
     sets = connection_sets(joined)
+    folding = None
+    if folded:
+        folding = fold_sets(sets, folded)
+        if folding is None:         # not exact here: the ports are flattened as before
+            for port in list(folded.values()):
+                port._syms.unfold()
     flow_sums: list = []
     for cset in sets:
         flat.connection_sets.append([_set_member(m) for m in cset.members])
         if cset.is_signal:
             _signal_set(flat, cset, problems, model)
-        else:
+        elif folding is None:
             _physical_set(flat, cset, flow_sums)
+    if folding is not None:
+        for members in folding.groups:
+            _physical_set(flat, _Joined(members), flow_sums)
+        _folded_variables(flat, folded, folding)
     _flow_sums(flat, flow_sums)
     connected = inside_connected(sets) | tried
     wired_inside = {port_key(m.port) for s in sets for m in s.members if m.outside}
     for el in elements:
         if isinstance(el, Connector) and port_key(el) not in connected:
+            if folded and id(el) in folded:
+                continue            # folded: its node carries what flows through it
             if el._parent is model or port_key(el) in wired_inside:
                 # a port of the model, or of a subsystem wired to its parts, left open
                 # outside: nothing flows through it
@@ -851,6 +974,22 @@ def _connections(flat: FlatModel, model, elements, connects, problems) -> None:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
                                     "connected. Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, sets, problems)
+
+
+class _Joined:
+    """A node of joined connection sets, read by `_physical_set` as a set."""
+
+    __slots__ = ("members",)
+
+    def __init__(self, members):
+        self.members = members
+
+
+def _folded_variables(flat: FlatModel, folded, folding) -> None:
+    """Record the folded ports, for logging their variables (`FlatModel.folded`)."""
+    node, flow = folding.node, folding.flow
+    flat.folded = [FoldedPort(port.path, type(port), node[pid].path, flow[pid],
+                              port._syms.position) for pid, port in folded.items()]
 
 
 @functools.lru_cache(maxsize=None)
@@ -894,6 +1033,8 @@ def _class_hint(cls) -> str:
 
 
 def _compatible(a, b) -> str:
+    if type(a) is type(b):
+        return ""
     if isinstance(a, SignalRef) != isinstance(b, SignalRef):
         sig, phys = (a, b) if isinstance(a, SignalRef) else (b, a)
         return (f"cannot connect signal '{sig.path()}' with physical port '{phys.path}' "
@@ -1001,10 +1142,9 @@ def _check_references(flat, model, elements, sets, problems) -> None:
     the ports of each connection set (a subsystem's port is one node inside and outside)
     and the ports of one domain on each component."""
     net = _UnionFind()
-    for cset in sets:
-        if cset.is_signal:
-            continue
-        ids = [id(m.port) for m in cset.members]
+    physical = [cset.members for cset in sets if not cset.is_signal]
+    for members in physical:
+        ids = [id(m.port) for m in members]
         for i in ids[1:]:
             net.union(ids[0], i)
     for el in elements:
@@ -1016,18 +1156,20 @@ def _check_references(flat, model, elements, sets, problems) -> None:
                 i = first.setdefault(type(port).domain, id(port))
                 if i != id(port):
                     net.union(i, id(port))
-    members: dict[int, list[Connector]] = {}
-    for cset in sets:
-        for m in cset.members:
-            if isinstance(m.port, Connector):
-                members.setdefault(net.find(id(m.port)), []).append(m.port)
-    for root, plist in members.items():
+    networks: dict[int, list[Connector]] = {}
+    grounded: set[int] = set()
+    for members in physical:
+        for m in members:
+            port = m.port
+            root = net.find(id(port))
+            networks.setdefault(root, []).append(port)
+            if port._parent is not None and port._parent._reference:
+                grounded.add(root)
+    for root, plist in networks.items():
         domain = type(plist[0]).domain
-        if domain is None or not domain.needs_reference:
+        if root in grounded or domain is None or not domain.needs_reference:
             continue
         owners = sorted({p._parent.path for p in plist if p._parent is not None})
-        if any(p._parent is not None and p._parent._reference for p in plist):
-            continue
         problems.append(f"{domain.name} network of {', '.join(owners)} has no reference. "
                         f"{domain.hint or 'Add a reference component to it.'}")
 

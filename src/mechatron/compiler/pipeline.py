@@ -108,8 +108,9 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
 
     flat = flatten(model, name)
     replace_pre(flat)
-    n_vars_flat = len(flat.variables)
-    n_eqs_flat = len(flat.equations) + len(flat.aliases)
+    # a folded port variable counts as an unknown and the equation that gives it
+    n_vars_flat = len(flat.variables) + flat.n_folded
+    n_eqs_flat = len(flat.equations) + len(flat.aliases) + flat.n_folded
     lap("flatten")
 
     if dimensions:
@@ -160,8 +161,8 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     lap("structure")
 
     # every logged variable as an expression of the unknowns
-    names = list(flat.variables)
-    out_expr = _logged_expressions(flat, alias)
+    names, out_expr, units, docs = _with_folded(flat, alias, list(flat.variables),
+                                                _logged_expressions(flat, alias))
     dists = [r.d for r in relations]
     n_ode, n_res, n_out = len(low.ode), len(low.residuals), len(out_expr)
     shadow = ca.SX.sym("pre_x", len(low.states))
@@ -276,8 +277,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         name=flat.name, state_names=list(low.states), alg_names=list(low.alg),
         param_names=[q.name for q in params], param_units=[q.unit for q in params],
         p0=np.array([q.value for q in params], dtype=float),
-        names=names, units=[flat.variables[n].unit for n in names],
-        docs=[flat.variables[n].doc for n in names],
+        names=names, units=units, docs=docs,
         relations=[(r.owner, r.op) for r in relations],
         x_start=np.array(state_starts, dtype=float), x_priority=state_prior,
         z_start=z_start, targets=targets, f_ode=f_ode, f_alg=f_alg, f_out=f_out,
@@ -291,6 +291,49 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         input_defaults=[_input_default(flat, q.name) for q in params if q.is_input])
     timings["total"] = sum(timings.values())
     return cm
+
+
+def _with_folded(flat, alias, names: list, exprs: list) -> tuple[list, list, list, list]:
+    """The logged names, expressions, units and docs, with the variables of folded
+    subsystem ports (:mod:`mechatron.compiler.folding`) in their places of declaration.
+    Each is a signed sum of model variables, read through alias elimination: one sparse
+    product with a slice of the stacked symbols for all of them, plus constants."""
+    variables = flat.variables
+    if not flat.folded:
+        return (names, exprs, [variables[n].unit for n in names],
+                [variables[n].doc for n in names])
+    eliminated = alias.eliminated
+    column: dict[str, int] = {}
+    rows, cols, vals, constant = [], [], [], []
+    folded = list(flat.folded_variables())
+    for r, (_, _, _, _, terms) in enumerate(folded):
+        offset = 0.0
+        for n, c in terms:
+            rep, k = eliminated.get(n, (n, 1.0))
+            if rep is None:
+                offset += c * k
+                continue
+            rows.append(r)
+            cols.append(column.setdefault(rep, len(column)))
+            vals.append(c * k)
+        constant.append(offset)
+    A = ca.DM.triplet(rows, cols, ca.DM(vals), len(folded), len(column))
+    values = ca.densify(ca.mtimes(A, flat.stack_variables(column)) + ca.DM(constant)) \
+        if column else ca.SX(ca.DM(constant))
+    values = ca.vertsplit(values)
+    units = [variables[n].unit for n in names]
+    docs = [variables[n].doc for n in names]
+    columns = (names, exprs, units, docs)
+    out = ([], [], [], [])
+    start = 0
+    for (name, unit, doc, position, _), value in zip(folded, values):
+        for o, c, item in zip(out, columns, (name, value, unit, doc)):
+            o.extend(c[start:position])
+            o.append(item)
+        start = max(start, position)
+    for o, c in zip(out, columns):
+        o.extend(c[start:])
+    return out
 
 
 def _initial_residuals(flat, alias) -> list:
