@@ -75,11 +75,12 @@ class FoldedPort:
     member ``node``; its through variables are the signed sums ``flow`` ``{member
     path: coefficient}`` of the members' through variables."""
 
-    __slots__ = ("path", "cls", "node", "flow", "position")
+    __slots__ = ("path", "cls", "node", "flow", "position", "order")
 
-    def __init__(self, path, cls, node, flow, position):
+    def __init__(self, path, cls, node, flow, position, order):
         self.path, self.cls, self.node, self.flow = path, cls, node, flow
         self.position = position    # how many model variables were declared before it
+        self.order = order
 
 
 @dataclass
@@ -236,7 +237,31 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     if problems:
         raise problems.error_class()(_summary(name, problems), problems=list(problems),
                                      path=name)
+    _declaration_order(flat)
     return flat
+
+
+def _declaration_order(flat: FlatModel) -> None:
+    """Move the variables of ports bound on first read (`_FoldedSymbols`) back to where
+    they are declared: declaration order breaks ties in later passes."""
+    late = flat.__dict__.pop("_late", None)
+    if not late:
+        return
+    late.sort(key=lambda item: item[:2])
+    moved = {n for *_, names in late for n in names}
+    rest = [n for n in flat.variables if n not in moved]
+    order = []
+    start = 0
+    for position, _, names in late:
+        order.extend(rest[start:position])
+        order.extend(names)
+        start = max(start, position)
+    order.extend(rest[start:])
+    variables = flat.variables
+    flat.variables = {n: variables[n] for n in order}
+    for port in flat.folded:        # still folded: after the ports declared before it
+        port.position += sum(len(names) for position, k, names in late
+                             if (position, k) < (port.position, port.order))
 
 
 class _Problems(list):
@@ -340,15 +365,22 @@ class _FoldedSymbols(dict):
     def __init__(self, flat, port, folded, problems):
         super().__init__()
         self._args = (flat, port, folded, problems)
+        # where its variables are declared: after this many model variables, and as
+        # the how-manieth port bound this way (for ports at the same place)
         self.position = len(flat.variables)
+        self.order = flat.__dict__["_folds"] = flat.__dict__.get("_folds", 0) + 1
 
     def unfold(self) -> None:
         flat, port, folded, problems = self._args
         if folded.pop(id(port), None) is None:
             return
         _, plain = _declaration_plan(type(port))
+        before = len(flat.variables)
         _bind_variables(flat, port, self, f"{port.path}.", port._parent.path, plain,
                         problems)
+        # bound late: put back in declaration order at the end of flattening
+        flat.__dict__.setdefault("_late", []).append(
+            (self.position, self.order, list(flat.variables)[before:]))
 
     def __missing__(self, key):
         self.unfold()
@@ -989,7 +1021,8 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     """Record the folded ports, for logging their variables (`FlatModel.folded`)."""
     node, flow = folding.node, folding.flow
     flat.folded = [FoldedPort(port.path, type(port), node[pid].path, flow[pid],
-                              port._syms.position) for pid, port in folded.items()]
+                              port._syms.position, port._syms.order)
+                   for pid, port in folded.items()]
 
 
 @functools.lru_cache(maxsize=None)

@@ -58,12 +58,11 @@ def foldable_ports(model: Component, elements) -> tuple[dict, dict]:
                 refused.add(type(el))
             continue
         prefetched[id(el)] = [(klass, items) for klass, items, _ in calls]
-        own = {id(p): p for p in ports if not p._starts}
-        for _, _, connects in calls:
-            for con in connects:
-                for port in con.ports:
-                    if id(port) in own:
-                        folded[id(port)] = port
+        wired = {id(port) for _, _, connects in calls for con in connects
+                 for port in con.ports}
+        for port in ports:          # in declaration order, as they are logged
+            if id(port) in wired and not port._starts:
+                folded[id(port)] = port
     return prefetched, folded
 
 

@@ -304,8 +304,9 @@ def _with_folded(flat, alias, names: list, exprs: list) -> tuple[list, list, lis
                 [variables[n].doc for n in names])
     eliminated = alias.eliminated
     column: dict[str, int] = {}
-    rows, cols, vals, constant = [], [], [], []
-    folded = list(flat.folded_variables())
+    entries: dict[tuple[int, int], float] = {}  # terms of one representative add up
+    constant = []
+    folded = sorted(flat.folded_variables(), key=lambda f: f[3])
     for r, (_, _, _, _, terms) in enumerate(folded):
         offset = 0.0
         for n, c in terms:
@@ -313,11 +314,12 @@ def _with_folded(flat, alias, names: list, exprs: list) -> tuple[list, list, lis
             if rep is None:
                 offset += c * k
                 continue
-            rows.append(r)
-            cols.append(column.setdefault(rep, len(column)))
-            vals.append(c * k)
+            key = (r, column.setdefault(rep, len(column)))
+            entries[key] = entries.get(key, 0.0) + c * k
         constant.append(offset)
-    A = ca.DM.triplet(rows, cols, ca.DM(vals), len(folded), len(column))
+    rows, cols = zip(*entries) if entries else ((), ())
+    A = ca.DM.triplet(list(rows), list(cols), ca.DM(list(entries.values())),
+                      len(folded), len(column))
     values = ca.densify(ca.mtimes(A, flat.stack_variables(column)) + ca.DM(constant)) \
         if column else ca.SX(ca.DM(constant))
     values = ca.vertsplit(values)

@@ -1,0 +1,205 @@
+"""Subsystem ports folded into the nodes they join (mechatron.compiler.folding): the same
+model, names, states and logged values as with every port written out as unknowns, on
+hierarchies two and three levels deep, the database's subsystem models, open ports, a
+port read by an equation, and a loop of ports that cannot be folded."""
+
+import numpy as np
+import pytest
+
+import mechatron as mt
+import mechatron.compiler.flatten as fl
+from mechatron.compiler.flatten import flatten
+from mechatron.library import electrical as el
+from mechatron.library import electromechanical as em
+from mechatron.library import rotational as rot
+from mechatron.library.electrical.interfaces import OnePort
+from tests.compiler.test_hierarchy import Pair, Stage
+
+
+def unfolded(monkeypatch, build):
+    """``build()`` compiled with no port folded (every port variable an unknown)."""
+    with monkeypatch.context() as m:
+        m.setattr(fl, "foldable_ports", lambda model, elements: ({}, {}))
+        return mt.compile_model(build())
+
+
+def deep_ladder():
+    m = mt.System("deep")
+    src = m.add("src", el.DCVoltageSource(V=2.0))
+    g = m.add("g", el.ElectricalReference())
+    a = m.add("a", Pair(R=1.0, C=1.0))
+    b = m.add("b", Pair(R=0.5, C=2.0))
+    m.connect(src.p, a.p)
+    m.connect(a.n, b.p)
+    m.connect(b.gnd, g.port, a.gnd, src.n)     # drawn in another order
+    return m
+
+
+class Drive(mt.Component):
+    """A DC motor with its rotor inertia: pins, a shaft and a support, wired inside."""
+
+    p = el.Pin()
+    n = el.Pin()
+    flange = rot.Flange()
+    support = rot.Flange()
+    R = el.Resistor(R=0.5)
+    L = el.Inductor(L=1e-2)
+    emf = em.RotationalEMF(k=0.1)
+    J = rot.Inertia(J=1e-3)
+
+    def equations(self):
+        return [mt.connect(self.p, self.R.p), mt.connect(self.R.n, self.L.p),
+                mt.connect(self.L.n, self.emf.p), mt.connect(self.emf.n, self.n),
+                mt.connect(self.emf.A, self.J.port, self.flange),
+                mt.connect(self.emf.B, self.support)]
+
+
+def two_drives():
+    m = mt.System("two_drives")
+    src = m.add("src", el.DCVoltageSource(V=12.0))
+    g = m.add("g", el.ElectricalReference())
+    fixed = m.add("fixed", rot.RotationalReference())
+    d1 = m.add("d1", Drive())
+    d2 = m.add("d2", Drive())
+    spring = m.add("k", rot.RotationalSpring(k=20.0))
+    load = m.add("load", rot.RotationalDamper(D=0.01))
+    m.connect(src.p, d1.p, d2.p)
+    m.connect(d1.n, d2.n, src.n, g.port)
+    m.connect(d1.flange, spring.A)
+    m.connect(spring.B, d2.flange, load.A)      # d2's flange: a port of three members
+    m.connect(load.B, fixed.port, d1.support, d2.support)
+    return m
+
+
+def assert_same(folded, plain, t_end, **options):
+    assert folded.names == plain.names
+    assert folded.units == plain.units
+    assert sorted(folded.state_names) == sorted(plain.state_names)
+    for key in ("variables", "equations"):
+        # as many in the flat model; after alias elimination, folding leaves at most as
+        # many (a port's through variable in a sum of three or more is gone with it)
+        assert folded.report[key]["flat"] == plain.report[key]["flat"]
+        assert folded.report[key]["after_alias"] <= plain.report[key]["after_alias"]
+    options = {"rtol": 1e-10, "atol": 1e-12, **options}
+    a = mt.simulate(folded, t_end, log="all", **options)
+    b = mt.simulate(plain, t_end, log="all", **options)
+    np.testing.assert_allclose(a.t, b.t)
+    for name in plain.names:
+        scale = max(1.0, float(np.max(np.abs(b[name]))))
+        np.testing.assert_allclose(a[name], b[name], rtol=0, atol=1e-9 * scale,
+                                   err_msg=name)
+
+
+@pytest.mark.parametrize("build,t_end", [(deep_ladder, 5.0), (two_drives, 0.2)],
+                         ids=["three_levels", "drive_used_twice"])
+def test_folded_ports_give_the_model_of_the_written_out_ports(build, t_end, monkeypatch):
+    flat = flatten(build())
+    assert flat.folded, "nothing was folded"
+    # no variable of a folded port is an unknown of the flat model
+    for port in flat.folded:
+        assert not [n for n in flat.variables if n.startswith(port.path + ".")]
+    assert_same(mt.compile_model(build()), unfolded(monkeypatch, build), t_end)
+
+
+@pytest.mark.parametrize("name", ["two_axis", "bldc_motor"])
+def test_database_subsystem_models_are_unchanged_by_folding(name, monkeypatch):
+    entry = mt.models.get(name)
+    assert flatten(entry.build()).folded
+    assert_same(mt.compile_model(entry.build()), unfolded(monkeypatch, entry.build),
+                min(entry.experiment.t_stop, 0.05), solver=entry.experiment.solver)
+
+
+def test_port_flows_balance_across_the_folded_node():
+    res = mt.simulate(two_drives(), 0.2, log="all", rtol=1e-10, atol=1e-12)
+    # what flows into a drive's pin flows on through its resistor; at the shared shaft
+    # node the torques of spring, drive and load sum to zero
+    np.testing.assert_allclose(res["d1.p.i"], res["d1.R.i"], atol=1e-12)
+    np.testing.assert_allclose(res["d1.n.i"], -res["d1.R.i"], atol=1e-12)
+    np.testing.assert_allclose(res["k.B.tau"] + res["d2.flange.tau"] + res["load.A.tau"],
+                               0.0, atol=1e-9)
+    np.testing.assert_allclose(res["d2.flange.w"], res["load.A.w"], atol=1e-12)
+
+
+def test_an_open_port_of_a_folded_subsystem_carries_nothing(monkeypatch):
+    def build():
+        m = mt.System("open")
+        src = m.add("src", el.DCVoltageSource(V=1.0))
+        g = m.add("g", el.ElectricalReference())
+        s = m.add("s", Stage())
+        m.connect(src.p, s.p)
+        m.connect(src.n, g.port, s.gnd)
+        return m                            # s.n open
+
+    res = mt.simulate(build(), 1.0, log="all")
+    np.testing.assert_allclose(res["s.n.i"], 0.0, atol=1e-15)
+    np.testing.assert_allclose(res["s.n.v"], res["s.c.v"], atol=1e-15)
+    assert_same(mt.compile_model(build()), unfolded(monkeypatch, build), 1.0)
+
+
+class Branch(OnePort):
+    """A two-pin branch whose voltage the model's equations give."""
+
+
+def reading_model():
+    """A stage fed through a source that follows half the stage's input voltage: an
+    equation of the model reads the stage's pin."""
+    m = mt.System("read")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    g = m.add("g", el.ElectricalReference())
+    b = m.add("b", Branch())
+    s = m.add("s", Stage())
+    probe = m.add("probe", el.Resistor(R=1e3))
+    m.connect(src.p, b.p)
+    m.connect(b.n, s.p)
+    m.connect(s.n, probe.p)
+    m.connect(src.n, g.port, s.gnd, probe.n)
+    m.add_equation(lambda: b.v == 0.5 * s.p.v)     # reads the stage's pin
+    return m
+
+
+def test_a_port_read_by_an_equation_is_written_out(monkeypatch):
+    flat = flatten(reading_model())
+    folded = {port.path for port in flat.folded}
+    assert "s.p" not in folded and {"s.n", "s.gnd"} <= folded
+    # in its place of declaration, as if never folded
+    names = list(flat.variables)
+    assert names.index("s.p.v") < names.index("s.r.v")
+    cm = mt.compile_model(reading_model())
+    assert_same(cm, unfolded(monkeypatch, reading_model), 1.0)
+    res = mt.simulate(cm, 1.0)
+    np.testing.assert_allclose(res["s.p.v"], 1.0 / 1.5, rtol=1e-12)
+
+
+class Short(mt.Component):
+    """A wire between its two pins: a node of folded ports alone."""
+
+    p = el.Pin()
+    n = el.Pin()
+    r = el.Resistor(R=1.0)          # a part, so that it is a subsystem
+
+    def equations(self):
+        return [mt.connect(self.p, self.n, self.r.p), mt.connect(self.r.n, self.n)]
+
+
+def test_a_loop_of_ports_is_flattened_as_before(monkeypatch):
+    def build():
+        m = mt.System("loop")
+        src = m.add("src", el.DCVoltageSource(V=1.0))
+        g = m.add("g", el.ElectricalReference())
+        w = m.add("w", Short())
+        load = m.add("load", el.Resistor(R=2.0))
+        m.connect(src.p, w.p, w.n, load.p)      # both pins on one outside node: a loop
+        m.connect(src.n, g.port, load.n)
+        return m
+
+    flat = flatten(build())
+    assert not flat.folded and "w.p.i" in flat.variables
+    errors = []
+    for compile_ in (lambda: mt.compile_model(build()),
+                     lambda: unfolded(monkeypatch, build)):
+        try:
+            compile_()
+            errors.append(None)
+        except Exception as exc:   # noqa: BLE001 - both ways must end alike
+            errors.append((type(exc), str(exc)))
+    assert errors[0] == errors[1]
