@@ -19,7 +19,7 @@ from tests.compiler.test_hierarchy import Pair, Stage
 def unfolded(monkeypatch, build):
     """``build()`` compiled with no port folded (every port variable an unknown)."""
     with monkeypatch.context() as m:
-        m.setattr(fl, "foldable_ports", lambda model, elements: ({}, {}))
+        m.setattr(fl, "plan_subsystems", lambda model, elements: ({}, {}))
         return mt.compile_model(build())
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
-from mechatron.compiler.folding import fold_sets, foldable_ports
+from mechatron.compiler.folding import join_planned, plan_subsystems
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
 from mechatron.core.connections import (connection_sets, inside_connected, is_driver,
                                         port_key)
@@ -216,7 +216,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     flat = FlatModel(name=name, context=BuildContext())
     problems = _Problems()
     elements = list(_walk(model))
-    prefetched, folded = foldable_ports(model, elements)
+    planned, folded = plan_subsystems(model, elements)
     for el in elements:
         if isinstance(el, Component) and el._partial and el is not model:
             problems.append(f"{el.describe()}: {type(el).__name__} is a partial class "
@@ -227,9 +227,9 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     _external_inputs(flat, model)
     try:
         with flat.context:
-            connects = _collect_equations(flat, elements, problems, prefetched)
+            connects = _collect_equations(flat, elements, problems, planned)
             _discrete_declarations(flat, elements, problems)
-        _connections(flat, model, elements, connects, problems, folded)
+        _connections(flat, model, elements, connects, problems, planned, folded)
     finally:
         for el in elements:
             el._syms = None
@@ -562,19 +562,16 @@ def _class_calls(el, method: str, where: str):
 
 
 def _collect_equations(flat: FlatModel, elements, problems,
-                       prefetched=None) -> list[tuple[Connect, str]]:
+                       planned=None) -> list[tuple[Connect, str]]:
     connects = []
     templates: dict = {}           # class -> _Template, or None where none applies
     for el in elements:
         if not isinstance(el, Component):
             continue
         where = el.path or flat.name
-        calls = prefetched.get(id(el)) if prefetched else None
-        if calls is not None:       # connections only, read before binding (folding)
-            if any(klass is type(el) for klass, _ in calls):
+        if planned and id(el) in planned:   # wired by its class's plan (folding)
+            if planned[id(el)][1].has_time_scales:
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
-            for _, items in calls:
-                connects.extend((item, el) for item in _as_equations(items))
             continue
         tpl = _template(flat, el, templates)
         if tpl is not None:
@@ -936,10 +933,12 @@ def _resolve(flat: FlatModel, port, sym_owner):
     return None
 
 
-def _connections(flat: FlatModel, model, elements, connects, problems, folded=None) -> None:
+def _connections(flat: FlatModel, model, elements, connects, problems, planned=None,
+                 folded=None) -> None:
     """Connection sets over the whole tree, with inside and outside connectors
-    (:mod:`mechatron.core.connections`), turned into aliases and flow sums; the ports
-    ``folded`` join their sets into one node (:mod:`mechatron.compiler.folding`)."""
+    (:mod:`mechatron.core.connections`), turned into aliases and flow sums; the
+    subsystems ``planned`` are wired by their class's plan, their ports ``folded`` into
+    the nodes they join (:mod:`mechatron.compiler.folding`)."""
     sym_owner: dict[str, SignalRef] = {}
     for el in elements:
         for key, decl in type(el)._declarations.items():
@@ -968,30 +967,32 @@ def _connections(flat: FlatModel, model, elements, connects, problems, folded=No
         if len(ok) > 1:
             joined.append((writer, ok))
     sets = connection_sets(joined)
-    folding = None
-    if folded:
-        folding = fold_sets(sets, folded)
-        if folding is None:         # not exact here: the ports are flattened as before
-            for port in list(folded.values()):
-                port._syms.unfold()
     flow_sums: list = []
     for cset in sets:
         flat.connection_sets.append([_set_member(m) for m in cset.members])
         if cset.is_signal:
             _signal_set(flat, cset, problems, model)
-        elif folding is None:
+        elif not planned:
             _physical_set(flat, cset, flow_sums)
-    if folding is not None:
-        for members in folding.groups:
+    if planned:
+        joining = join_planned(sets, planned, folded)
+        nodes = joining.groups
+        for members in nodes:
             _physical_set(flat, _Joined(members), flow_sums)
-        _folded_variables(flat, folded, folding)
+        _folded_variables(flat, folded, joining)
+    else:
+        nodes = [cset.members for cset in sets if not cset.is_signal]
     _flow_sums(flat, flow_sums)
     connected = inside_connected(sets) | tried
     wired_inside = {port_key(m.port) for s in sets for m in s.members if m.outside}
     for el in elements:
         if isinstance(el, Connector) and port_key(el) not in connected:
-            if folded and id(el) in folded:
-                continue            # folded: its node carries what flows through it
+            owner = el._parent
+            if planned and (id(el) in folded or id(owner._parent) in planned):
+                continue            # folded, or wired inside a planned subsystem
+            if planned and id(owner) in planned:
+                _open_port(flat, el)    # a planned port an equation reads, open outside
+                continue
             if el._parent is model or port_key(el) in wired_inside:
                 # a port of the model, or of a subsystem wired to its parts, left open
                 # outside: nothing flows through it
@@ -1005,7 +1006,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, folded=No
                 if port_key(SignalRef(el, key)) not in connected:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
                                     "connected. Connect a source, e.g. blocks.Constant.")
-    _check_references(flat, model, elements, sets, problems)
+    _check_references(flat, model, elements, nodes, problems)
 
 
 class _Joined:
@@ -1020,8 +1021,9 @@ class _Joined:
 def _folded_variables(flat: FlatModel, folded, folding) -> None:
     """Record the folded ports, for logging their variables (`FlatModel.folded`)."""
     node, flow = folding.node, folding.flow
-    flat.folded = [FoldedPort(port.path, type(port), node[pid].path, flow[pid],
-                              port._syms.position, port._syms.order)
+    flat.folded = [FoldedPort(port.path, type(port), node[pid].path,
+                              dict.fromkeys(flow[pid], 1.0), port._syms.position,
+                              port._syms.order)
                    for pid, port in folded.items()]
 
 
@@ -1170,12 +1172,12 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
         flat.equations.append(FlatEquation(residual, origin))
 
 
-def _check_references(flat, model, elements, sets, problems) -> None:
+def _check_references(flat, model, elements, nodes, problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
     the ports of each connection set (a subsystem's port is one node inside and outside)
     and the ports of one domain on each component."""
     net = _UnionFind()
-    physical = [cset.members for cset in sets if not cset.is_signal]
+    physical = nodes                # the members of each physical node
     for members in physical:
         ids = [id(m.port) for m in members]
         for i in ids[1:]:

@@ -1,69 +1,141 @@
-"""Ports of subsystems folded into the nodes they join (part of pass 2, connections).
+"""Subsystems wired once per class, their ports folded into the nodes they join (part of
+pass 2, connections).
 
 A subsystem's port (``Stage.p``, wired inside with ``connect(self.p, self.r.p)``) is one
 node of the network seen from two sides: an *outside* element of the subsystem's own
 connection set and an *inside* element of its parent's (:mod:`mechatron.core.connections`).
 Written out, each such port adds its across and through variables as unknowns and one
-equation for each; alias elimination then removes them again. A model built from a
-subsystem used a thousand times would carry half again as many unknowns through
-flattening and alias elimination as the same model built flat.
+equation for each, which alias elimination then removes again, and every instance of the
+subsystem repeats the same connections. A model built from a subsystem used a thousand
+times would carry half again as many unknowns through flattening as the same model built
+flat.
 
-Folding joins the two sets of such a port into one node before any equation is written,
-as Modelica tools merge inside and outside connection sets, so that the port's variables
-never become unknowns. They are still logged:
+Here a subsystem class whose equations are connections only is wired once: its *plan*
+lists the sets its connections form, by relative path, from its first instance. Every
+instance then joins each of its sets into the node outside its port (the set holding no
+port of its own stays a node of its own), as Modelica tools merge inside and outside
+connection sets, and the port's variables never become unknowns. They are still logged:
 
 - each across variable equals the node's (the first member's) across variable;
-- each through variable follows from the flow balance of the sets on one side of the
-  port. The sets joined by folded ports form a tree (a port joins its inner set to its
-  outer one); rooted at its busiest set, the through variable of the port above a set is
-  the signed sum of the flows of that set's members and of the ports below it. A port
-  left open outside carries nothing.
+- each through variable is the sum of the through variables of the inside members of
+  its set (what flows into the port flows on into the parts), a nested subsystem's port
+  standing for its own set's sum.
 
-A port is folded only when folding is exact: its component's equations are connections
-and nothing else (so nothing reads the port's symbols but connections), it has no start
-value, and the joined sets form a tree in which every node keeps a member of its own.
-Anything else (an equation reading the port, a loop of ports, a node of ports alone) is
-flattened as before, which also keeps the messages about such models unchanged.
+A plan requires each set to hold at most one port of the subsystem itself (so that the
+sums above are well defined and the joined sets form a tree), every port of its parts to
+be connected inside, physical connections only, no signal inputs on its parts and no
+attributes of the instance beyond its declarations. Any other subsystem is flattened
+connection by connection as before, which keeps the messages about such models unchanged.
+A planned port that an equation reads (``s.p.v`` in the parent's equations) is bound as a
+variable on first read and stays a member of its node (see ``flatten._FoldedSymbols``).
 """
 
 from __future__ import annotations
 
-from collections import deque
-
 from mechatron.core.component import Component, Connect, Connector, System
-from mechatron.core.connections import Member
+from mechatron.core.connections import Member, connection_sets
+from mechatron.core.declarations import Input
 
-__all__ = ["foldable_ports", "fold_sets"]
+__all__ = ["ClassPlan", "plan_subsystems", "join_planned"]
+
+_PLAIN_KEYS = frozenset(("doc", "_name", "_parent", "_values", "_starts", "_syms",
+                         "_children", "_path_cache"))
 
 
-def foldable_ports(model: Component, elements) -> tuple[dict, dict]:
-    """``(prefetched, folded)``: for each subsystem whose equations are connections
-    only, its ``[(klass, items)]`` from ``equations()`` (so that flattening does not call
-    it twice) under ``id(component)``, and the ports it wires inside, ``id -> Connector``
-    in tree order. ``equations()`` is called before symbols are bound: reading a variable
-    or parameter raises, which marks the class as not foldable (once per class)."""
-    prefetched: dict[int, list] = {}
+class ClassPlan:
+    """The connection sets of a subsystem class, by path relative to an instance: for
+    each set, the name of the class's own port in it (or None) and the other members as
+    tuples of names from the instance (``("r", "p")``), ordered by path."""
+
+    __slots__ = ("own", "sets", "has_time_scales")
+
+    def __init__(self, own, sets, has_time_scales):
+        self.own = own                  # own port name -> index of its set
+        self.sets = sets                # [(own port name | None, [names])]
+        self.has_time_scales = has_time_scales
+
+
+def plan_subsystems(model: Component, elements) -> tuple[dict, dict]:
+    """``(planned, folded)``: the instances wired by their class's plan, ``id -> (instance,
+    plan)``, and their ports folded, ``id -> Connector`` in tree order."""
+    plans: dict[type, ClassPlan | None] = {}
+    planned: dict[int, tuple] = {}
     folded: dict[int, Connector] = {}
-    refused: set[type] = set()
     for el in elements:
-        if el is model or not isinstance(el, Component) or type(el) in refused:
+        if el is model or not isinstance(el, Component) or isinstance(el, System):
             continue
-        children = el._children.values()
-        ports = [c for c in children if isinstance(c, Connector) and not c._children]
-        if not ports or not any(isinstance(c, Component) for c in children):
+        cls = type(el)
+        plan = plans.get(cls, 0)
+        if plan is None:
             continue
-        calls = _connections_only(el)
-        if calls is None:
-            if not isinstance(el, System):      # a System's equations are per instance
-                refused.add(type(el))
+        if any(k not in _PLAIN_KEYS and k not in el._children for k in el.__dict__):
+            continue                    # instance attributes: connections may differ
+        if plan == 0:
+            plan = plans[cls] = _plan(el)
+            if plan is None:
+                continue
+        children = el._children
+        if any(children[name]._starts for name in plan.own):
+            continue                    # a start value on a port: written out
+        planned[id(el)] = (el, plan)
+        for name in plan.own:
+            folded[id(children[name])] = children[name]
+    return planned, folded
+
+
+def _plan(el) -> ClassPlan | None:
+    """The plan of ``el``'s class read from ``el`` (None if the class does not qualify).
+    ``equations()`` is called before symbols are bound: reading a variable or parameter
+    raises, which marks the class as not qualifying."""
+    children = el._children
+    ports = [n for n, c in children.items() if isinstance(c, Connector)]
+    parts = [c for c in children.values() if isinstance(c, Component)]
+    if not ports or not parts:
+        return None
+    connects = []
+    has_equations = False
+    for klass in reversed(type(el).__mro__):
+        own = vars(klass).get("equations")
+        if own is None or klass is Component:
             continue
-        prefetched[id(el)] = [(klass, items) for klass, items, _ in calls]
-        wired = {id(port) for _, _, connects in calls for con in connects
-                 for port in con.ports}
-        for port in ports:          # in declaration order, as they are logged
-            if id(port) in wired and not port._starts:
-                folded[id(port)] = port
-    return prefetched, folded
+        has_equations = has_equations or klass is type(el)
+        try:
+            items = own(el)
+        except Exception:       # noqa: BLE001 - reads a symbol: not connections only
+            return None
+        for item in _items(items):
+            if not isinstance(item, Connect) or len(item.ports) < 2 or not all(
+                    isinstance(p, Connector) for p in item.ports):
+                return None
+            a = item.ports[0]
+            if any(type(p) is not type(a) for p in item.ports[1:]):
+                return None             # the connection-by-connection path words it
+            connects.append((el, list(item.ports)))
+    if not connects:
+        return None
+    prefix = len(el.path) + 1 if el.path else 0
+    sets, own = [], {}
+    wired = set()
+    for cset in connection_sets(connects):
+        mine = [m for m in cset.members if m.outside]
+        if len(mine) > 1:
+            return None                 # two own ports on one node: written out
+        names = []
+        for m in cset.members:
+            wired.add(id(m.port))
+            if not m.outside:
+                names.append(tuple(m.path[prefix:].split(".")))
+        if mine:
+            own[mine[0].port._name] = len(sets)
+        sets.append((mine[0].port._name if mine else None, names))
+    for part in parts:
+        if any(isinstance(d, Input) for d in type(part)._declarations.values()):
+            return None                 # a signal input inside: checked as before
+        if any(isinstance(c, Connector) and id(c) not in wired
+               for c in part._children.values()):
+            return None                 # a port left open inside: reported as before
+    own = {name: own[name] for name in ports if name in own}   # declaration order
+    return ClassPlan(own, sets, has_equations)
 
 
 def _items(items):
@@ -76,141 +148,107 @@ def _items(items):
             yield item
 
 
-def _connections_only(el) -> list | None:
-    calls = []
-    for klass in reversed(type(el).__mro__):
-        own = vars(klass).get("equations")
-        if own is None or klass is Component:
-            continue
-        try:
-            items = own(el)
-        except Exception:       # noqa: BLE001 - read a symbol: flattened as before
-            return None
-        connects = list(_items(items))
-        if not all(isinstance(item, Connect) for item in connects):
-            return None
-        calls.append((klass, items, connects))
-    return calls
-
-
-class Folding:
-    """The result of :func:`fold_sets`: the joined physical sets (members of folded
-    ports removed, ordered by path) and, for each folded port, the node its across
-    variables equal and the signed member paths its through variables sum."""
+class Joining:
+    """The result of :func:`join_planned`: the physical nodes (lists of members ordered
+    by path), and for each folded port the node's first member and the members whose
+    through variables sum to its own."""
 
     __slots__ = ("groups", "node", "flow")
 
     def __init__(self):
         self.groups: list[list[Member]] = []
-        self.node: dict[int, Member] = {}       # id(port) -> first member of its node
-        self.flow: dict[int, dict[str, float]] = {}   # id(port) -> {member path: sign}
+        self.node: dict[int, Member] = {}
+        self.flow: dict[int, list[str]] = {}
 
 
-def fold_sets(sets, folded: dict) -> Folding | None:
-    """Join the physical connection sets ``sets`` through the ports ``folded`` (see the
-    module's text); None where folding would not be exact (a folded port in no set of
-    its own component, a loop of folded ports, a node left with folded ports only, or a
-    port on both sides of one node), and the caller flattens the ports as before."""
-    where: dict[tuple, int] = {}
-    # per set with folded ports: its other members and its folded ones as (id, sign)
-    split: dict[int, tuple[list, list]] = {}
-    physical = []
-    for k, cset in enumerate(sets):
+def join_planned(sets, planned: dict, folded: dict) -> Joining:
+    """The nodes of the model: its connection sets ``sets`` (from every connection not
+    wired by a plan) with each folded port replaced by its set inside, and the sets
+    inside the planned instances that no outside port joins."""
+    where: dict[int, tuple] = {}        # id(folded port) -> (instance, plan, set index)
+    for el, plan in planned.values():
+        children = el._children
+        for name, k in plan.own.items():
+            port = children[name]
+            if id(port) in folded:
+                where[id(port)] = (el, plan, k)
+    out = Joining()
+    expanded: dict[int, tuple[list, list]] = {}
+    # folded ports joined into a node outside their subsystem (instances come parents
+    # first, so a nested port is joined before its own subsystem is reached)
+    joined_outside: set[int] = set()
+
+    def members_of(el, names_list):
+        members, ports = [], []
+        for names in names_list:
+            port = el
+            for name in names:
+                port = port._children[name]
+            if id(port) in where:
+                inner, nested = inner_of(port)
+                members.extend(inner)
+                ports.extend(nested)
+                joined_outside.add(id(port))
+            else:
+                members.append(Member(port, False))
+        return members, ports
+
+    def inner_of(port):
+        """The inside members of a folded port's set, nested ports resolved, and the
+        folded ports met on the way (itself first)."""
+        got = expanded.get(id(port))
+        if got is None:
+            el, plan, k = where[id(port)]
+            members, nested = members_of(el, plan.sets[k][1])
+            got = expanded[id(port)] = (members, [port] + nested)
+            out.flow[id(port)] = [m.path for m in members]
+        return got
+
+    groups = out.groups
+    for cset in sets:
         if cset.is_signal:
             continue
-        physical.append(k)
         members = cset.members
-        if not any(id(m.port) in folded for m in members):
+        if not any(id(m.port) in where for m in members):
+            groups.append(members)
             continue
-        plain, own = [], []
+        node, ports = [], []
         for m in members:
-            pid = id(m.port)
-            if pid in folded:
-                where[(pid, m.outside)] = k
-                own.append((pid, m.sign))
+            if id(m.port) in where and not m.outside:
+                inner, nested = inner_of(m.port)
+                node.extend(inner)
+                ports.extend(nested)
+                joined_outside.add(id(m.port))
             else:
-                plain.append(m)
-        split[k] = (plain, own)
-    parent = {k: k for k in split}
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    adjacent: dict[int, list] = {k: [] for k in split}
-    out = Folding()
-    for pid in folded:
-        inner = where.get((pid, True))
-        if inner is None:
-            return None
-        outer = where.get((pid, False))
-        if outer is None:           # open outside: nothing flows through it
-            out.flow[pid] = {}
-            continue
-        ra, rb = find(inner), find(outer)
-        if ra == rb:
-            return None             # a loop of folded ports
-        parent[rb] = ra
-        adjacent[inner].append((pid, outer))
-        adjacent[outer].append((pid, inner))
-    trees: dict[int, list[int]] = {}
-    for k in split:
-        trees.setdefault(find(k), []).append(k)
-    groups = []
-    for k in physical:
-        if k not in split:
-            groups.append(sets[k].members)
-            continue
-        ks = trees.get(k)
-        if ks is None:
-            continue                # not the root of its tree: joined there
-        members = [m for j in ks for m in split[j][0]]
-        if not members or len({id(m.port) for m in members}) != len(members):
-            return None
-        if len(ks) > 1:
-            members.sort(key=_order)
-            _tree_flows(split, ks, adjacent, out.flow)
-        groups.append(members)
-        first = members[0]
-        for j in ks:
-            for pid, _ in split[j][1]:
-                out.node[pid] = first
+                node.append(m)
+        _add(out, node, ports)
+    for el, plan in planned.values():
+        children = el._children
+        for owner, names_list in plan.sets:
+            if owner is None:           # a node inside the subsystem only
+                node, ports = members_of(el, names_list)
+            else:
+                port = children[owner]
+                if id(port) not in where:       # read by an equation: a member itself
+                    node, ports = members_of(el, names_list)
+                    node.insert(0, Member(port, True))
+                elif id(port) in joined_outside:
+                    continue
+                else:                   # open outside: nothing flows through it
+                    node, ports = inner_of(port)
+                    node, ports = list(node), list(ports)
+            _add(out, node, ports)
     groups.sort(key=lambda g: _order(g[0]))
-    out.groups = groups
     return out
+
+
+def _add(out: Joining, node: list, ports: list) -> None:
+    node.sort(key=_order)
+    out.groups.append(node)
+    first = node[0]
+    for port in ports:
+        out.node[id(port)] = first
 
 
 def _order(m: Member) -> tuple:
     return (m.path, m.outside)
-
-
-def _tree_flows(split, ks, adjacent, flow) -> None:
-    """The through sums of the folded ports of one tree of sets, leaves first."""
-    root = max(ks, key=lambda k: (len(adjacent[k]), -k))
-    up: dict[int, int] = {root: 0}      # set -> the port above it
-    order = [root]
-    queue = deque([root])
-    while queue:
-        k = queue.popleft()
-        for pid, other in adjacent[k]:
-            if other not in up:
-                up[other] = pid
-                order.append(other)
-                queue.append(other)
-    for k in reversed(order[1:]):
-        above = up[k]
-        plain, own = split[k]
-        total: dict[str, float] = {}
-        for m in plain:
-            total[m.path] = total.get(m.path, 0.0) + m.sign
-        own_sign = 1.0
-        for pid, sign in own:
-            if pid == above:
-                own_sign = sign
-            else:       # a port below (or open outside): its flow, signed in this set
-                for path, c in flow[pid].items():
-                    total[path] = total.get(path, 0.0) + sign * c
-        # own_sign * i_above + total == 0
-        flow[above] = {path: -c / own_sign for path, c in total.items() if c}

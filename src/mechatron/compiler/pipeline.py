@@ -327,12 +327,19 @@ def _with_folded(flat, alias, names: list, exprs: list) -> tuple[list, list, lis
     docs = [variables[n].doc for n in names]
     columns = (names, exprs, units, docs)
     out = ([], [], [], [])
-    start = 0
-    for (name, unit, doc, position, _), value in zip(folded, values):
-        for o, c, item in zip(out, columns, (name, value, unit, doc)):
+    start = k = 0
+    while k < len(folded):          # the variables of the ports declared at one place
+        position = folded[k][3]
+        end = k + 1
+        while end < len(folded) and folded[end][3] == position:
+            end += 1
+        part = folded[k:end]
+        inserted = ([f[0] for f in part], values[k:end], [f[1] for f in part],
+                    [f[2] for f in part])
+        for o, c, items in zip(out, columns, inserted):
             o.extend(c[start:position])
-            o.append(item)
-        start = max(start, position)
+            o.extend(items)
+        start, k = position, end
     for o, c in zip(out, columns):
         o.extend(c[start:])
     return out
