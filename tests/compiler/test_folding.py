@@ -101,11 +101,19 @@ def test_folded_ports_give_the_model_of_the_written_out_ports(build, t_end, monk
     assert_same(mt.compile_model(build()), unfolded(monkeypatch, build), t_end)
 
 
-@pytest.mark.parametrize("name", ["two_axis", "bldc_motor"])
-def test_database_subsystem_models_are_unchanged_by_folding(name, monkeypatch):
+@pytest.mark.parametrize("name,variant", [("two_axis", "acausal"), ("bldc_motor", None),
+                                          ("two_axis", "inputs")])
+def test_database_subsystem_models_are_unchanged_by_folding(name, variant, monkeypatch):
+    """The ``inputs`` variant of two_axis connects a brake to ``axis.load.port``, a part
+    inside each axis: those axes are then wired connect by connect."""
     entry = mt.models.get(name)
-    assert flatten(entry.build()).folded
-    assert_same(mt.compile_model(entry.build()), unfolded(monkeypatch, entry.build),
+    kwargs = {"variant": variant} if variant else {}
+
+    def build():
+        return entry.build(**kwargs)
+
+    assert bool(flatten(build()).folded) == (variant != "inputs")
+    assert_same(mt.compile_model(build()), unfolded(monkeypatch, build),
                 min(entry.experiment.t_stop, 0.05), solver=entry.experiment.solver)
 
 

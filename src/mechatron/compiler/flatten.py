@@ -259,6 +259,7 @@ def _declaration_order(flat: FlatModel) -> None:
     order.extend(rest[start:])
     variables = flat.variables
     flat.variables = {n: variables[n] for n in order}
+    flat.__dict__.pop("_variable_stack", None)     # stacked in the old order
     for port in flat.folded:        # still folded: after the ports declared before it
         port.position += sum(len(names) for position, k, names in late
                              if (position, k) < (port.position, port.order))
@@ -422,18 +423,16 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
         problems.append(f"{where()} refers to parameters of an enclosing component, but "
                         f"{el.describe()} has none. Give {key} a value.")
         return ca.SX.nan(), float("nan")
-    missing = _missing_parameters(expr, type(parent))
+    missing, message, name = _binding_check(expr, type(parent), decl.unit)
     if missing:
         problems.append(f"{where()}: {', '.join(missing)} is not a parameter of "
                         f"{parent.describe()}. Pass on parameters of the class whose body "
                         "declares the part.")
         return ca.SX.nan(), float("nan")
-    message = _binding_dimensions(expr, type(parent), decl.unit)
     if message:
         problems.add(UnitError, f"{where()}: {message}")
         return ca.SX.nan(), float("nan")
     pvals = values.get(id(parent), {})
-    name = _plain_reference(expr)
     if name is not None:            # R=R: the parent's symbol and value themselves
         sym, value = parent._syms[name], float(pvals.get(name, float("nan")))
     else:
@@ -448,18 +447,22 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
 
 
 _TEXTS: dict = {}
-_MISSING: dict = {}
+_CHECKS: dict = {}
 
 
-def _missing_parameters(expr, parent_cls) -> list:
-    """The names ``expr`` reads that are not parameters of ``parent_cls`` (once per
-    expression and class; the entry holds ``expr`` so that its id stays unique)."""
-    key = (id(expr), parent_cls)
-    got = _MISSING.get(key)
+def _binding_check(expr, parent_cls, unit: str) -> tuple:
+    """``(missing, message, name)`` of ``expr`` read in ``parent_cls`` for a parameter in
+    ``unit``: the names that are not parameters of the class, why the dimensions do not
+    agree ("" if they do), and the parameter's name if ``expr`` is just that parameter.
+    Worked out once per expression, class and unit (the entry holds ``expr``, so that its
+    id stays unique)."""
+    key = (id(expr), parent_cls, unit)
+    got = _CHECKS.get(key)
     if got is None:
         decls = parent_cls._declarations
-        got = _MISSING[key] = (expr, [n for n in expr.names
-                                      if not isinstance(decls.get(n), Parameter)])
+        missing = [n for n in expr.names if not isinstance(decls.get(n), Parameter)]
+        message = "" if missing else _binding_dimensions(expr, parent_cls, unit)
+        got = _CHECKS[key] = (expr, (missing, message, _plain_reference(expr)))
     return got[1]
 
 
@@ -946,6 +949,16 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
                 sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
     joined = []
     tried: set[tuple] = set()  # ports of a failed connect: not reported again as open
+    if planned and _reaches_inside(connects, planned):
+        # a connection from outside to a part inside a planned subsystem: wire every
+        # subsystem connect by connect, its ports written out (as without plans)
+        connects = list(connects)
+        for el, _ in planned.values():
+            for _, items in _class_calls(el, "equations", el.path):
+                connects.extend((item, el) for item in _as_equations(items))
+        for port in list(folded.values()):
+            port._syms.unfold()
+        planned = folded = None
     for con, writer in connects:
         where = writer.path or flat.name
         resolved = []
@@ -1007,6 +1020,24 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
                                     "connected. Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, nodes, problems)
+
+
+def _reaches_inside(connects, planned) -> bool:
+    """Whether a connect names a port of a part of a planned subsystem (``axis.load.port``
+    from outside ``axis``): the subsystem's plan then does not hold all of that node."""
+    inside: set[int] = set()        # ids of the components within planned subsystems
+    for el, _ in planned.values():
+        stack = [el]
+        while stack:
+            for child in stack.pop()._children.values():
+                if isinstance(child, Component):
+                    inside.add(id(child))
+                    stack.append(child)
+    for con, _ in connects:
+        for port in con.ports:
+            if isinstance(port, Connector) and id(port._parent) in inside:
+                return True
+    return False
 
 
 class _Joined:
