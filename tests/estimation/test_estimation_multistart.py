@@ -192,6 +192,28 @@ def test_a_tie_goes_to_the_lower_start(monkeypatch, problem):
     assert res.best_start == 0
 
 
+def test_a_failed_start_is_reported_and_not_chosen(monkeypatch, problem):
+    from mechatron.errors import MechatronError, SimulationError
+    from mechatron.estimation import problem as module
+    real = module.estimate
+    X = start_points(problem, 4, seed=0)
+
+    def failing(prob, *, initial=None, **kw):
+        if initial is not None and (initial[0] == X[2][0] or kw.get("max_iterations") == 3):
+            raise SimulationError("Radau step did not converge (stand-in)")
+        return real(prob, initial=initial, **kw)
+    monkeypatch.setattr(module, "estimate", failing)
+    res = real(problem, starts=4, seed=0, workers=1, max_iterations=20)
+    row = res.starts[2]
+    assert row["error"] == "SimulationError: Radau step did not converge (stand-in)"
+    assert row["parameters"] is None and not row["converged"] and row["cost"] == np.inf
+    assert res.best_start != 2 and all(r["error"] is None for k, r in
+                                       enumerate(res.starts) if k != 2)
+    with pytest.raises(MechatronError, match="all 4 starts failed; the first: "
+                                             "SimulationError"):
+        real(problem, starts=4, seed=0, workers=1, max_iterations=3)
+
+
 # --------------------------------------------------------------------------------- CLI
 MODEL_FILE = '''
 import mechatron as mt
