@@ -112,4 +112,3 @@ def test_sensitivity_on_the_cluster_equals_the_local_run(client):
     remote = sens.evaluate(Problem(), ["k"], X, client=client)
     np.testing.assert_array_equal(local, remote)
     np.testing.assert_allclose(local[:, 0], 14.0 * X[:, 0] ** 2)
-
