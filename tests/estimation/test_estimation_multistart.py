@@ -253,6 +253,10 @@ def test_estimate_command_runs_the_starts_of_its_file(tmp_path, capsys):
                  "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "3 starts on local processes" in out and "converged" in out
+    assert main(["estimate", str(cfg), "--starts", "1", "--dask", "tcp://127.0.0.1:1"]) == 2
+    assert "give --starts K (K > 1)" in capsys.readouterr().err
+    assert main(["estimate", str(cfg), "--dask", "tcp://127.0.0.1:1"]) == 2
+    assert "no Dask scheduler answers there" in capsys.readouterr().err
     bad = tmp_path / "bad.toml"
     bad.write_text(cfg.read_text().replace("starts = 8", "starts = 0"))
     assert main(["estimate", str(bad)]) == 2

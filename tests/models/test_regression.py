@@ -69,5 +69,7 @@ def test_a_wrong_expected_value_fails_its_row_and_the_command(monkeypatch, capsy
     assert main(["regression", "msd_vertical", "--workers", "1", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["passed"] and doc["models"][0]["model"] == "msd_vertical"
+    assert main(["regression", "msd_vertical", "--dask", "tcp://127.0.0.1:1"]) == 2
+    assert "no Dask scheduler answers there" in capsys.readouterr().err
     assert main(["regression", "no_such_model"]) == 2
     assert "no model 'no_such_model'" in capsys.readouterr().err

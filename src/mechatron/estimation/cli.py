@@ -90,6 +90,9 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     opts = cfg.get("estimation", {})
     starts = args.starts if args.starts is not None else int(opts.get("starts", 1))
     address = args.dask or opts.get("address")
+    if args.dask and starts == 1:
+        raise CommandError("--dask: the cluster runs the starts of a multi-start "
+                           "estimation; give --starts K (K > 1) or [estimation] starts.")
     if address and starts > 1:
         where = args.dask and "--dask" or "[estimation] address"
         _need_dask(where)
