@@ -234,7 +234,13 @@ def _rows_dask(r: dict) -> list[dict]:
                  "1 worker", r["workers_1_s"], r["speedup_1_to_2_workers"]),
             _row("Dask sweep, 2 workers vs this process", "s", r["workers_2_s"],
                  "local loop", r["local_s"], r["ratio_local_over_2_workers"]),
-            _row("Dask per-task overhead", "s", r["per_task_overhead_s"])]
+            _row("Dask per-task overhead", "s", r["per_task_overhead_s"]),
+            _row("Dask multi-start estimation, 2 workers vs 1 (LocalCluster)", "s",
+                 r["multistart_workers_2_s"], "1 worker", r["multistart_workers_1_s"],
+                 r["multistart_speedup_1_to_2_workers"]),
+            _row("Dask multi-start estimation, 2 workers vs this process", "s",
+                 r["multistart_workers_2_s"], "local loop", r["multistart_local_s"],
+                 r["multistart_ratio_local_over_2_workers"])]
 
 
 def _rows_pwm(r: dict) -> list[dict]:

@@ -586,6 +586,47 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# -------------------------------------------------------------------------- regression
+def cmd_regression(args: argparse.Namespace) -> int:
+    from mechatron.estimation.cli import _need_dask, _reach_scheduler
+    from mechatron.models.regression import POINTS, run_regression
+    if args.workers is not None and args.workers < 1:
+        raise CommandError(f"--workers: at least 1, got {args.workers}.")
+    names = [mt.models.get(n).name for n in args.names] if args.names else \
+        [e.name for e in mt.models.list()]
+    if args.dask:
+        _need_dask("--dask")
+        _reach_scheduler("--dask", args.dask)
+    start = time.perf_counter()
+    with progress(args, total=len(names), desc="regression", unit="model") as bar:
+        rows = run_regression(names, workers=args.workers, address=args.dask,
+                              progress=lambda done, total: bar.update(done - bar.n))
+    wall = time.perf_counter() - start
+    failed = [r["model"] for r in rows if not r["passed"]]
+    where = f"the Dask cluster at {args.dask}" if args.dask else \
+        ("this process" if args.workers == 1 else
+         f"{args.workers or os.cpu_count() or 1} local process(es)")
+    if args.json:
+        _emit_json({"models": rows, "points": POINTS, "where": where, "wall_time_s": wall,
+                    "passed": not failed, "failed": failed})
+        return EXIT_FAILURE if failed else EXIT_OK
+    _emit(f"{len(rows)} model(s) on {where}, {POINTS} output points each, in "
+          f"{_duration(wall)}:")
+    _emit(_table(["model", "variants", "expected: worst rel. err (limit)",
+                  "variants: worst dev (limit)", "result"],
+                 [[r["model"], ", ".join(r["variants"]) or "-",
+                   "-" if r["error"] else
+                   f"{r['expected_worst']:.1e} ({r['expected_tolerance']:g})",
+                   "-" if r["error"] or len(r["variants"]) < 2 else
+                   f"{r['variants_worst']:.1e} ({r['variant_tolerance']:g})",
+                   "ok" if r["passed"] else
+                   (f"ERROR {r['error']}" if r["error"] else "FAILED")]
+                  for r in rows], right="23"))
+    _emit(f"\n{len(rows) - len(failed)} of {len(rows)} passed"
+          + (f"; failed: {', '.join(failed)}" if failed else "") + ".")
+    return EXIT_FAILURE if failed else EXIT_OK
+
+
 # -------------------------------------------------------------------------------- demo
 @dataclass(frozen=True)
 class DemoCheck:
@@ -859,21 +900,23 @@ def _demo_startup_plot(d: DemoRun) -> Path:
 
 def _demo_database(d: DemoRun) -> None:
     """Every database model: its default experiment against its expected values, and its
-    variants against each other."""
+    variants against each other (the rows of ``mechatron regression``, run here)."""
+    from mechatron.models.regression import run_regression
     rows = []
-    for entry in mt.models.list():
-        cmp = compare_variants(entry, points=201)
-        ref = cmp.results[cmp.reference]
-        worst_expected = max((_relative(abs(ref.final(entry.output_paths(cmp.reference)[k])
-                                            - v), abs(v))
-                              for k, v in entry.expected.items()), default=0.0)
-        d.check(f"{entry.name}: expected values", worst_expected, entry.expected_tolerance)
-        worst = cmp.worst()
-        if len(cmp.results) > 1:
-            d.check(f"{entry.name}: variants agree", worst, entry.variant_tolerance)
-        wall = sum(r.stats.wall_time for r in cmp.results.values())
-        rows.append([entry.name, ", ".join(cmp.results), f"{worst_expected:.1e}",
-                     f"{worst:.1e}" if len(cmp.results) > 1 else "-", _duration(wall)])
+    for r in run_regression(workers=1):
+        if r["error"]:
+            d.check(f"{r['model']}: runs", math.inf, 0.0)
+            rows.append([r["model"], "-", "-", "-", r["error"]])
+            continue
+        d.check(f"{r['model']}: expected values", r["expected_worst"],
+                r["expected_tolerance"])
+        several = len(r["variants"]) > 1
+        if several:
+            d.check(f"{r['model']}: variants agree", r["variants_worst"],
+                    r["variant_tolerance"])
+        rows.append([r["model"], ", ".join(r["variants"]), f"{r['expected_worst']:.1e}",
+                     f"{r['variants_worst']:.1e}" if several else "-",
+                     _duration(r["wall_time_s"])])
     d.say(_table(["model", "variants", "expected: worst rel. err", "variants: worst dev",
                   "simulated in"], rows, right="234"))
 
@@ -1123,6 +1166,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="FILE.png", help="write an overlay plot")
     _add_json(p)
     p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("regression", help="check every database model against its "
+                                          "expected values",
+                       description="Regression run of the model database: each model's "
+                                   "default experiment against its expected values and "
+                                   "its variants against each other, one task per model "
+                                   "on local processes or a Dask cluster. Exit code 1 if "
+                                   "a model fails.")
+    p.add_argument("names", nargs="*", metavar="NAME",
+                   help="models to check (default: the whole database)")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="local worker processes (default: one per CPU; 1: in this process)")
+    p.add_argument("--dask", metavar="ADDRESS",
+                   help="run the models on the Dask cluster at ADDRESS (needs "
+                        "dask.distributed)")
+    _add_json(p)
+    p.set_defaults(func=cmd_regression)
 
     p = sub.add_parser("demo", help="the showcase, end to end",
                        description="Build the DC motor as an acausal network and as ODEs, "

@@ -5,7 +5,8 @@
 * :mod:`.classic`: the classic motor tests (locked rotor, time constants, friction).
 * :mod:`.discretize`: sampled trajectories with exact forward sensitivities.
 * :mod:`.problem`: weighted least squares over several experiments, with confidence
-  intervals (:mod:`.uncertainty`: honest ones for correlated residuals).
+  intervals (:mod:`.uncertainty`: honest ones for correlated residuals);
+  :mod:`.multistart`: several starts inside the bounds, as batch tasks, the best kept.
 * :mod:`.validation`: the fitted model on other data (RMSE, fit %, residual
   correlations), :mod:`.expressions`: measured outputs as expressions of variables.
 * :mod:`.sensitivity`: Monte Carlo sensitivity analysis.

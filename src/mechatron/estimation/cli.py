@@ -82,17 +82,40 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     from mechatron.estimation.config import build_estimation, load_config
     from mechatron.estimation.problem import estimate
     _positive("--max-iterations", args.max_iterations)
+    _positive("--starts", args.starts)
+    _positive("--workers", args.workers)
+    _positive("--seed", args.seed, 0)
     cfg = load_config(args.config)
     out = _out_dir(args.out)
+    opts = cfg.get("estimation", {})
+    starts = args.starts if args.starts is not None else int(opts.get("starts", 1))
+    address = args.dask or opts.get("address")
+    if args.dask and starts == 1:
+        raise CommandError("--dask: the cluster runs the starts of a multi-start "
+                           "estimation; give --starts K (K > 1) or [estimation] starts.")
+    if address and starts > 1:
+        where = args.dask and "--dask" or "[estimation] address"
+        _need_dask(where)
+        _reach_scheduler(where, str(address))
     t0 = time.perf_counter()
     prob = build_estimation(cfg)
     setup = time.perf_counter() - t0
-    bar = Progress("estimate", enabled=not args.quiet)
+    if starts > 1:
+        bar = Progress("estimate", starts, enabled=not args.quiet)
+        multi = dict(starts=starts, seed=args.seed if args.seed is not None
+                     else int(opts.get("seed", 0)),
+                     sampling=args.sampling or opts.get("sampling", "lhs"),
+                     workers=args.workers if args.workers is not None
+                     else opts.get("workers"), address=address,
+                     progress=lambda done, total: bar.update(done, "starts"))
+    else:
+        bar = Progress("estimate", enabled=not args.quiet)
+        multi = dict(callback=lambda k, th, cost: bar.update(
+            k, f"(iteration), cost {cost:.6g}"))
     with _printed_here():
         res = estimate(prob, max_iterations=args.max_iterations,
                        covariance=args.covariance, profile=_profile_arg(args.profile),
-                       callback=lambda k, th, cost: bar.update(
-                           k, f"(iteration), cost {cost:.6g}"))
+                       **multi)
     bar.close()
     doc = res.to_dict()
     doc["setup_s"] = setup
@@ -115,6 +138,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     emit(f"  {len(prob.experiments)} experiment(s), {prob.n_residuals} residuals, "
          f"{len(prob.names)} free; {res.iterations} iterations, {res.evaluations} "
          f"simulations, {res.wall_time:.2f} s (+{setup:.2f} s setup); {res.message}")
+    if res.starts:
+        emit(_starts_summary(res, address))
     emit(f"  cost {res.cost_initial:.6g} -> {res.cost:.6g}")
     rows = []
     for j, name in enumerate(res.names):
@@ -162,6 +187,31 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     for f in files:
         emit(f"  wrote {f}")
     return 0
+
+
+def _starts_summary(res, address) -> str:
+    """The table of a multi-start estimation: every start, the chosen one marked."""
+    rows = []
+    for r in res.starts:
+        values = r["parameters"] or {}
+        rows.append([("* " if r["start"] == res.best_start else "  ") + str(r["start"])]
+                    + [f"{r['initial'][n]:.4g}" for n in res.names]
+                    + [f"{values[n]:.6g}" if n in values else "-" for n in res.names]
+                    + [f"{r['cost']:.6g}" if r["error"] is None else "-",
+                       "yes" if r["converged"] else ("FAILED" if r["error"] else "no")])
+    failed = [r for r in res.starts if r["error"]]
+    best = res.cost
+    reached = sum(1 for r in res.starts if r["error"] is None
+                  and r["cost"] <= best * (1 + 1e-6) + 1e-300)
+    head = (f"  {len(res.starts)} starts on "
+            f"{'the Dask cluster at ' + str(address) if address else 'local processes'}"
+            f" ({sum(r['evaluations'] for r in res.starts)} simulations); start "
+            f"{res.best_start} has the lowest cost, reached by {reached} start(s)"
+            + (f"; {len(failed)} failed (first: {failed[0]['error']})" if failed else "")
+            + ":\n")
+    return head + table(["start"] + [f"{n} start" for n in res.names] + list(res.names)
+                        + ["cost", "converged"], rows,
+                        right="".join(str(k) for k in range(1, 2 * len(res.names) + 2)))
 
 
 class _Drop(logging.Filter):
@@ -472,6 +522,22 @@ def add_commands(sub) -> None:
     p.add_argument("--profile", action="append", metavar="NAME[,NAME]",
                    help="also compute profile-likelihood intervals of these parameters "
                         "('all' for every one)")
+    p.add_argument("--starts", type=int, metavar="K",
+                   help="multi-start: fit from the starting values and K-1 points spread "
+                        "inside the bounds, keep the best (file: [estimation] starts; "
+                        "default 1)")
+    p.add_argument("--seed", type=int, metavar="S",
+                   help="seed of the multi-start points (file: [estimation] seed; "
+                        "default 0)")
+    p.add_argument("--sampling", choices=("lhs", "sobol"),
+                   help="multi-start points: Latin hypercube (default) or Sobol "
+                        "(file: [estimation] sampling)")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="local worker processes for the starts (default: one per CPU, at "
+                        "most K; 1: serial)")
+    p.add_argument("--dask", metavar="ADDRESS",
+                   help="run the starts on the Dask cluster at ADDRESS (needs "
+                        "dask.distributed)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_json(p)
     p.set_defaults(func=cmd_estimate)

@@ -26,7 +26,9 @@ log = logging.getLogger(__name__)
 
 _TOP = {"model", "experiments", "parameters", "fixed", "offsets", "free_x0",
         "virtual_bench", "options", "sensitivity", "requirements", "design", "simulation",
-        "inputs", "outputs", "title", "validation"}
+        "inputs", "outputs", "title", "validation", "estimation"}
+#: Keys of ``[estimation]``: multi-start estimation (see :mod:`.multistart`).
+ESTIMATION_KEYS = ("starts", "seed", "sampling", "workers", "address")
 #: Keys of an ``[[experiments]]`` (and ``[[validation]]``) table.
 _EXPERIMENT_KEYS = ("name", "file", "time", "inputs", "outputs", "units", "params", "x0",
                     "hold", "sigma", "rows", "t_range", "params_free", "fit")
@@ -262,6 +264,19 @@ def check_config(cfg: dict, path: str = "config") -> list[str]:
                      minimum=1, maximum=MAX_SUBSTEPS)
         if "jit" in opts and opts["jit"] not in (True, False, "auto"):
             c.add("[options] jit", f"must be true, false or \"auto\", got {opts['jit']!r}")
+
+    est = cfg.get("estimation")
+    if est is not None and c.keys("[estimation]", est, ESTIMATION_KEYS):
+        if "starts" in est:
+            c.number("[estimation] starts", est["starts"], integer=True, minimum=1)
+        if "seed" in est:
+            c.number("[estimation] seed", est["seed"], integer=True, nonnegative=True)
+        if "sampling" in est:
+            c.text("[estimation] sampling", est["sampling"], ("lhs", "sobol"))
+        if "workers" in est:
+            c.number("[estimation] workers", est["workers"], integer=True, minimum=1)
+        if "address" in est:
+            c.text("[estimation] address", est["address"])
 
     sens = cfg.get("sensitivity")
     if sens is not None and c.keys("[sensitivity]", sens, ("samples", "method", "seed",

@@ -553,11 +553,38 @@ class EstimationProblem:
 
     def __reduce__(self):
         """Pickle as the constructor's arguments (the CasADi functions are rebuilt, with
-        the same substeps): for process pools and Dask workers."""
+        the same substeps) and how each experiment's substeps were chosen (so that
+        :meth:`refine` checks them the same way): for process pools and Dask workers."""
         import copy
+        chosen = [{k: b[k] for k in ("auto", "error_initial", "substeps_initial") if k in b}
+                  for b in self.bound]
         return (_rebuild, (self.cm, self.experiments, copy.deepcopy(self.free),
                            dict(self._init, substeps=[b["substeps"] for b in self.bound],
-                                validation=self.validation)))
+                                validation=self.validation), chosen))
+
+    def substep_state(self) -> list:
+        """The substeps of each experiment and their step functions, as they are now
+        (:meth:`refine` may change them during a fit): give it to
+        :meth:`restore_substeps` to start the next fit from the same discretization."""
+        return [(b["substeps"], b["traj"]) for b in self.bound]
+
+    def restore_substeps(self, state: list) -> None:
+        """Put back the substeps of :meth:`substep_state`: ``(substeps, trajectory)`` per
+        experiment, or plain substep counts (the step functions are then rebuilt where
+        the count differs from the present one)."""
+        changed = False
+        for b, item in zip(self.bound, state):
+            m, traj = item if isinstance(item, tuple) else (int(item), None)
+            if traj is None:
+                if m == b["substeps"]:
+                    continue
+                traj = self._trajectory(b, m, self._use_jit(b["exp"].n * m))
+                traj.check_ticks(b["p"])
+            if traj is not b["traj"] or m != b["substeps"]:
+                b["traj"], b["substeps"] = traj, m
+                changed = True
+        if changed:
+            self._build_residual()
 
     def _start_values(self) -> dict:
         return {f.name: f.initial for f in self.free}
@@ -836,6 +863,13 @@ class EstimationResult:
     #: the start (``error_initial``, when chosen) and at the estimates (``error``), and
     #: the ``tolerance`` (see :class:`EstimationProblem`'s ``substep_tol``).
     discretization: dict = field(default_factory=dict)
+    #: Multi-start estimation (``estimate(..., starts=K)``): every start, in start
+    #: order, as ``{"start", "initial", "parameters", "cost", "converged", "message",
+    #: "iterations", "evaluations", "wall_time_s", "error"}`` (see
+    #: :mod:`.multistart`); empty for a single start.
+    starts: list = field(default_factory=list)
+    #: The start this result comes from (0: the problem's starting values).
+    best_start: int = 0
 
     @property
     def parameters(self) -> dict:
@@ -866,7 +900,8 @@ class EstimationResult:
                 "message": self.message,
                 "trajectory": [{"iteration": h["iteration"], "cost": h["cost"],
                                 "parameters": dict(zip(self.names, h["theta"]))}
-                               for h in self.history]}
+                               for h in self.history],
+                "starts": self.starts, "best_start": self.best_start}
 
     # -- plots -------------------------------------------------------------------------------
     def plot_fit(self, path) -> Path:
@@ -917,8 +952,11 @@ class EstimationResult:
         return path
 
 
-def _rebuild(cm, experiments, free, kwargs):
-    return EstimationProblem(cm, experiments, free, **kwargs)
+def _rebuild(cm, experiments, free, kwargs, chosen=()):
+    prob = EstimationProblem(cm, experiments, free, **kwargs)
+    for b, how in zip(prob.bound, chosen):
+        b.update(how)
+    return prob
 
 
 def validation_errors(prob: EstimationProblem, theta, experiments=None) -> dict:
@@ -959,9 +997,19 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
              ftol: float = 1e-10, gtol: float = 1e-10, callback=None, refine: bool = True,
              fine_ratio: float = 1.0, max_step: float = 0.5,
              log_space: bool = False, covariance: str = "hac", bandwidth=None,
-             profile=()) -> EstimationResult:
+             profile=(), initial=None, starts: int = 1, seed: int = 0,
+             sampling: str = "lhs", workers: int | None = None, address: str | None = None,
+             client=None, progress=None) -> EstimationResult:
     """Solve ``problem`` (see the module docstring); ``callback(iteration, theta, cost)``
     is called after each Jacobian evaluation (one per iteration) for progress display.
+
+    ``initial`` starts from that decision vector (in the order of ``problem.names``)
+    instead of the problem's starting values. ``starts`` above 1 runs a multi-start
+    estimation (:mod:`.multistart`): the starting values and ``starts - 1`` points
+    sampled inside the bounds (``sampling`` "lhs" or "sobol", from ``seed``), each fit a
+    batch task on local processes (``workers``) or a Dask cluster (``client`` or
+    ``address``); the best fit is returned with every start in ``result.starts``, and
+    ``progress(done, starts)`` is called as the fits arrive (``callback`` is not).
 
     ``covariance`` is ``"hac"`` (default: the Newey-West sandwich with a Bartlett window,
     valid for correlated residuals, see :mod:`.uncertainty`) or ``"white"`` (the
@@ -974,10 +1022,30 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     if covariance not in ("hac", "white"):
         raise ParameterError(f"estimate: covariance must be 'hac' or 'white', got "
                              f"{covariance!r}.")
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or starts < 1:
+        raise ParameterError(f"estimate: starts must be a whole number >= 1, got "
+                             f"{starts!r}.")
+    if starts > 1:
+        from mechatron.estimation.multistart import estimate_multistart
+        return estimate_multistart(
+            problem, starts=int(starts), seed=seed, sampling=sampling, workers=workers,
+            address=address, client=client, progress=progress, initial=initial,
+            max_iterations=max_iterations, xtol=xtol, ftol=ftol, gtol=gtol,
+            refine=refine, fine_ratio=fine_ratio, max_step=max_step,
+            log_space=log_space, covariance=covariance, bandwidth=bandwidth,
+            profile=profile)
     prob = problem
     scales = np.array(prob.scales)
     lo_t, hi_t = prob.bounds
-    theta0 = np.clip(prob.initial, lo_t, hi_t)
+    if initial is None:
+        theta0 = np.clip(prob.initial, lo_t, hi_t)
+    else:
+        theta0 = np.asarray(initial, dtype=float)
+        if theta0.shape != lo_t.shape or not np.all(np.isfinite(theta0)):
+            raise ParameterError(f"estimate: initial must be {lo_t.size} finite number(s), "
+                                 f"one per decision variable ({', '.join(prob.names)}), "
+                                 f"got {initial!r}.")
+        theta0 = np.clip(theta0, lo_t, hi_t)
     # with log_space, positive parameters (lower bound >= 0, positive start) move in log
     # space: a step is a factor and they cannot reach 0 (but they may creep towards it)
     logv = np.zeros(theta0.size, dtype=bool)
@@ -1107,12 +1175,12 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     # residual level s and by how much wider these are than the white-noise ones
     ratio = float(np.nanmin(std / std_white)) if np.all(std_white > 0) else 1.0
     scale = math.sqrt(s2) * max(1.0, ratio if math.isfinite(ratio) else 1.0)
-    for b, (name, err) in zip(prob.bound, prob.discretization_error(theta).items()):
+    for bb, (name, err) in zip(prob.bound, prob.discretization_error(theta).items()):
         rel = err / scale if scale > 0 else err
-        disc[name] = {"substeps": int(b["substeps"]),
-                      "substeps_initial": int(b.get("substeps_initial", b["substeps"])),
-                      "chosen": "error" if b.get("auto") else "given",
-                      "error_initial": b.get("error_initial"),
+        disc[name] = {"substeps": int(bb["substeps"]),
+                      "substeps_initial": int(bb.get("substeps_initial", bb["substeps"])),
+                      "chosen": "error" if bb.get("auto") else "given",
+                      "error_initial": bb.get("error_initial"),
                       "error": err if math.isfinite(err) else None,
                       "error_std": rel if math.isfinite(rel) else None,
                       "tolerance": prob.substep_tol}
@@ -1121,24 +1189,14 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
                 rel) else f"{rel:.3g} standard errors of the estimates"
             warnings.append(
                 f"experiment '{name}': the discretization error estimate at the estimates "
-                f"is {shown} with {b['substeps']} substeps per sample (tolerance "
+                f"is {shown} with {bb['substeps']} substeps per sample (tolerance "
                 f"{prob.substep_tol:g}): the estimates may be biased by the "
                 f"discretization. Give more substeps (or substeps = None to choose them "
                 f"from the error), or raise max_substeps.")
     for w in warnings:
         log.warning("estimate: %s", w, extra={"in_summary": True})
-    profile_ci = {}
-    if profile:
-        names = list(prob.names) if profile is True else list(profile)
-        for name in names:
-            if name not in prob.names:
-                raise ParameterError(f"estimate: profile: '{name}' is not a free "
-                                     f"parameter ({', '.join(prob.names)}).", path=name)
-            i = prob.names.index(name)
-            # the likelihood-ratio threshold s^2 c^2, widened by the HAC design effect
-            ratio = (std[i] / std_white[i]) ** 2 if std_white[i] > 0 else 1.0
-            thr = s2 * tq ** 2 * ratio
-            profile_ci[name] = profile_interval(prob, theta, i, thr, std[i])
+    profile_ci = profile_intervals(prob, theta, profile, s2=s2, tq=tq, std=std,
+                                   std_white=std_white)
     wall = time.perf_counter() - start
     lo_b, hi_b = prob.bounds
     hits = at_bounds(prob.names, theta, lo_b, hi_b)
@@ -1149,16 +1207,37 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
     for name, why in flags.items():
         log.warning("estimate: %s %s", name, why)
     return EstimationResult(
-        names=list(prob.names), initial=prob.initial, values=theta, std=std, ci95=ci,
+        names=list(prob.names), initial=theta0, values=theta, std=std, ci95=ci,
         correlation=corr, cost_initial=cost0, cost=cost,
         nrmse=_nrmse(prob, prob.simulate(theta)),
-        nrmse_initial=_nrmse(prob, prob.simulate(prob.initial)), history=history,
+        nrmse_initial=_nrmse(prob, prob.simulate(theta0)), history=history,
         iterations=len(history) - 1, evaluations=counts["sims"], wall_time=wall,
         success=bool(success), message=message, problem=prob, at_bound=hits,
         covariance=covariance, std_white=std_white, ci95_white=ci_white,
         bandwidth_fraction=b, residual_rho1=rho1, warnings=warnings,
         profile_ci95=profile_ci, validation=validation_errors(prob, theta),
         flags=flags, discretization=disc)
+
+
+def profile_intervals(prob: EstimationProblem, theta, profile, *, s2: float, tq: float,
+                      std, std_white) -> dict:
+    """Profile-likelihood 95% intervals of the parameters named in ``profile`` (``True``:
+    all) at the estimates ``theta``: ``s2`` the residual variance, ``tq`` the interval's
+    critical value, ``std``/``std_white`` the reported and white-noise standard errors
+    (see :func:`estimate`)."""
+    out = {}
+    if not profile:
+        return out
+    names = list(prob.names) if profile is True else list(profile)
+    for name in names:
+        if name not in prob.names:
+            raise ParameterError(f"estimate: profile: '{name}' is not a free "
+                                 f"parameter ({', '.join(prob.names)}).", path=name)
+        i = prob.names.index(name)
+        # the likelihood-ratio threshold s^2 c^2, widened by the HAC design effect
+        ratio = (std[i] / std_white[i]) ** 2 if std_white[i] > 0 else 1.0
+        out[name] = profile_interval(prob, theta, i, s2 * tq ** 2 * ratio, std[i])
+    return out
 
 
 def std_scale(prob: EstimationProblem, r, J, covariance: str = "hac",
