@@ -303,9 +303,10 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     ctx = flat.context
     values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
     variables, unknowns = flat.variables, ctx.unknowns
-    for el in elements:
+    shared = (flat, folded, problems)
+    for order, el in enumerate(elements):
         if folded and id(el) in folded:
-            el._syms = _FoldedSymbols(flat, el, folded, problems)
+            el._syms = _FoldedSymbols(shared, el, len(variables), order)
             continue
         syms = {}
         own_values = values[id(el)] = {}
@@ -363,16 +364,19 @@ class _FoldedSymbols(dict):
     empty until an equation reads one, which binds the port's variables as any other
     port's and takes it off the folded ports."""
 
-    def __init__(self, flat, port, folded, problems):
-        super().__init__()
-        self._args = (flat, port, folded, problems)
-        # where its variables are declared: after this many model variables, and as
-        # the how-manieth port bound this way (for ports at the same place)
-        self.position = len(flat.variables)
-        self.order = flat.__dict__["_folds"] = flat.__dict__.get("_folds", 0) + 1
+    __slots__ = ("shared", "port", "position", "order")
+
+    def __init__(self, shared, port, position, order):
+        self.shared = shared            # (flat, folded, problems)
+        self.port = port
+        # where its variables are declared: after this many model variables, and the
+        # port's place in the tree (for ports at the same place)
+        self.position = position
+        self.order = order
 
     def unfold(self) -> None:
-        flat, port, folded, problems = self._args
+        flat, folded, problems = self.shared
+        port = self.port
         if folded.pop(id(port), None) is None:
             return
         _, plain = _declaration_plan(type(port))
@@ -546,14 +550,19 @@ def _check_range(el, key, decl, value, problems) -> None:
                      f"{el.describe()}: {key} must be <= {decl.max:g}, got {value:g}.")
 
 
+@functools.lru_cache(maxsize=None)
+def _own_methods(cls, method: str) -> tuple:
+    """``(klass, function)`` of each class in ``cls``'s MRO (bases first, Component left
+    out) that defines ``method`` itself: read once per class."""
+    return tuple((klass, vars(klass)[method]) for klass in reversed(cls.__mro__)
+                 if method in vars(klass) and klass is not Component)
+
+
 def _class_calls(el, method: str, where: str):
     """``(klass, result)`` of each class's own ``method`` (``equations``,
     ``initial_equations``) on ``el``, parents first, each class once (Modelica's
     ``extends``); a failure inside is a ModelError naming the component and class."""
-    for klass in reversed(type(el).__mro__):
-        own = vars(klass).get(method)
-        if own is None or klass is Component:
-            continue
+    for klass, own in _own_methods(type(el), method):
         try:
             items = own(el)
         except ModelError:
@@ -1025,19 +1034,9 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
 def _reaches_inside(connects, planned) -> bool:
     """Whether a connect names a port of a part of a planned subsystem (``axis.load.port``
     from outside ``axis``): the subsystem's plan then does not hold all of that node."""
-    inside: set[int] = set()        # ids of the components within planned subsystems
-    for el, _ in planned.values():
-        stack = [el]
-        while stack:
-            for child in stack.pop()._children.values():
-                if isinstance(child, Component):
-                    inside.add(id(child))
-                    stack.append(child)
-    for con, _ in connects:
-        for port in con.ports:
-            if isinstance(port, Connector) and id(port._parent) in inside:
-                return True
-    return False
+    inside = planned.inside
+    return any(isinstance(port, Connector) and id(port._parent) in inside
+               for con, _ in connects for port in con.ports)
 
 
 class _Joined:
@@ -1242,6 +1241,13 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
 
 # -- hybrid declarations (mt.Discrete, initial_equations); kept apart from the passes above
 
+@functools.lru_cache(maxsize=None)
+def _discrete_keys(cls) -> tuple:
+    """``(key, declaration)`` of a class's ``Discrete`` declarations (once per class)."""
+    from mechatron.core.declarations import Discrete
+    return tuple((k, d) for k, d in cls._declarations.items() if isinstance(d, Discrete))
+
+
 def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     """Record the discrete variables with their kind and collect initial equations.
 
@@ -1257,9 +1263,7 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
             if name:
                 flat.discrete[name] = "real"
     for el in elements:
-        for key, decl in type(el)._declarations.items():
-            if not isinstance(decl, Discrete):
-                continue
+        for key, decl in _discrete_keys(type(el)):
             path = _join(el.path, key)
             sym_name = flat.variables[path].sym.name()
             if sym_name not in flat.discrete and sym_name in ctx.derivative:

@@ -57,12 +57,19 @@ class ClassPlan:
 
 def plan_subsystems(model: Component, elements) -> tuple[dict, dict]:
     """``(planned, folded)``: the instances wired by their class's plan, ``id -> (instance,
-    plan)``, and their ports folded, ``id -> Connector`` in tree order."""
+    plan)``, and their ports folded, ``id -> Connector`` in tree order. ``planned.inside``
+    holds the ids of the components within planned instances."""
     plans: dict[type, ClassPlan | None] = {}
-    planned: dict[int, tuple] = {}
+    planned = _Planned()
+    inside = planned.inside
     folded: dict[int, Connector] = {}
-    for el in elements:
-        if el is model or not isinstance(el, Component) or isinstance(el, System):
+    for el in elements:             # parents first
+        if not isinstance(el, Component) or el is model:
+            continue
+        parent = id(el._parent)
+        if parent in planned or parent in inside:
+            inside.add(id(el))
+        if isinstance(el, System):
             continue
         cls = type(el)
         plan = plans.get(cls, 0)
@@ -81,6 +88,14 @@ def plan_subsystems(model: Component, elements) -> tuple[dict, dict]:
         for name in plan.own:
             folded[id(children[name])] = children[name]
     return planned, folded
+
+
+class _Planned(dict):
+    """``id -> (instance, plan)``, with the ids of the components within them."""
+
+    def __init__(self):
+        super().__init__()
+        self.inside: set[int] = set()
 
 
 def _plan(el) -> ClassPlan | None:
