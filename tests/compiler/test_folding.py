@@ -211,3 +211,32 @@ def test_a_loop_of_ports_is_flattened_as_before(monkeypatch):
         except Exception as exc:   # noqa: BLE001 - both ways must end alike
             errors.append((type(exc), str(exc)))
     assert errors[0] == errors[1]
+
+
+class SeriesSources(mt.Component):
+    """Two current sources in series with a capacitor between them: a cut set of
+    sources once the subsystem's pins close the loop through a resistor."""
+
+    p = el.Pin()
+    n = el.Pin()
+    i1 = el.DCCurrentSource(I=1.0)
+    i2 = el.DCCurrentSource(I=1.0)
+    c = el.Capacitor(C=1.0)
+
+    def equations(self):
+        return [mt.connect(self.p, self.i1.p), mt.connect(self.i1.n, self.c.p),
+                mt.connect(self.c.n, self.i2.p), mt.connect(self.i2.n, self.n)]
+
+
+def test_a_singular_network_inside_a_planned_subsystem_is_named_in_physical_terms():
+    m = mt.System("ii")
+    s = m.add("s", SeriesSources())
+    r = m.add("r", el.Resistor(R=1.0))
+    g = m.add("g", el.ElectricalReference())
+    m.connect(g.port, s.p, r.n)
+    m.connect(s.n, r.p)
+    assert flatten(m).folded
+    with pytest.raises(mt.errors.StructuralError,
+                       match=r"sources s\.i1 and s\.i2 form a cut set: their currents are "
+                             r"not independent"):
+        mt.compile_model(m)

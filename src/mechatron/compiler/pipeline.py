@@ -447,6 +447,9 @@ def _port_roles(flat, alias) -> dict[str, tuple[str, str, str, bool]]:
             continue
         domain = domain_of.get(n.rpartition(".")[0])
         text = getattr(domain, var.kind, "") if domain is not None else ""
+        if domain is None:          # a port wired by a subsystem's plan: by its unit
+            match = [t for k, t in by_unit.get(var.unit, ()) if k == var.kind]
+            text = match[0] if len(match) == 1 else ""
         one = _quantity(text) or f"{var.kind} variable"
         roles[rep] = (var.kind, one, _plural(one), True)
     for n in alias.unknowns:
