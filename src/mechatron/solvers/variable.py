@@ -19,9 +19,10 @@ import numpy as np
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
 from mechatron.solvers.inputs import driven_parameters
+from mechatron.solvers.logging import evaluate_point
 
 __all__ = ["integrate_variable", "consistent_algebraics", "held_states", "LINEAR_SOLVERS",
-           "linear_solver_for"]
+           "linear_solver_for", "auto_linear_solver"]
 
 #: Newton iterations that polish the algebraic unknowns at the output times
 Z_ITERATIONS = 3
@@ -52,10 +53,15 @@ def _quiet_stderr():
 #: sparse solver factorizes only its nonzeros: on an RC ladder the iteration matrix is
 #: tridiagonal, so a step costs O(N) rather than the O(N^3) of a dense factorization.
 LINEAR_SOLVERS = {
-    "auto": "qr",           # sparse QR (CasADi's own), for any size
+    "auto": "qr",           # sparse QR (CasADi's own), for any size; see auto_linear_solver
     "sparse": "csparse",    # sparse LU with partial pivoting (CSparse)
     "dense": "lapacklu",    # dense LU (LAPACK): every entry, for comparison and tiny models
 }
+
+#: The plug-in ``linear_solver="auto"`` takes for a tridiagonal system it may solve
+#: without pivoting (the Thomas algorithm, O(N) with no fill): see
+#: :func:`auto_linear_solver`.
+TRIDIAGONAL = "tridiag"
 
 PLUGINS = {"cvodes": "cvodes", "bdf": "cvodes", "idas": "idas", "rosenbrock": "rosenbrock",
            "rk45": "erk"}
@@ -84,6 +90,58 @@ def linear_solver_for(cm: CompiledModel, choice: str) -> str:
                               f"one of {', '.join(map(repr, LINEAR_SOLVERS))}.",
                               path=cm.name)
     return plugin
+
+
+def auto_linear_solver(cm: CompiledModel, plugin: str, p: np.ndarray,
+                       drive: tuple = ()) -> str:
+    """The plug-in of ``linear_solver="auto"``: the Thomas algorithm for a CVODES run of
+    a linear, time-invariant ODE whose Jacobian ``J`` is tridiagonal (a chain: an RC
+    ladder, a discretized rod or line) and, at the parameters ``p``, has
+    ``J_ii <= 0`` and ``|J_ii| >= sum_j |J_ij|`` (j != i) in every row; sparse QR
+    otherwise.
+
+    CVODES solves ``(I - gamma J) d = r`` with ``gamma > 0``. Under those conditions
+    that matrix is strictly diagonally dominant by rows for every ``gamma``, which is
+    what the Thomas algorithm (elimination without pivoting) needs to be stable and
+    never meet a zero pivot; a linear model's ``J`` does not change along the run, so
+    checking it once at ``p`` covers every step. Anything else (a DAE, events,
+    inputs given as tables, a Jacobian that depends on the states or on time, a band
+    wider than one, a row that is not dominant) keeps the general sparse QR."""
+    fallback = LINEAR_SOLVERS["auto"]
+    if plugin != "cvodes" or cm.nz or cm.nr or drive or cm.nX < 3:
+        return fallback
+    jac = _tridiagonal_jacobian(cm)
+    if jac is None:
+        return fallback
+    fn, rows, cols = jac
+    with np.errstate(all="ignore"):
+        values = evaluate_point(fn, [np.asarray(p, dtype=float)])
+    on_diag = rows == cols
+    diag = np.zeros(cm.nX)
+    diag[rows[on_diag]] = values[on_diag]
+    off = np.bincount(rows[~on_diag], np.abs(values[~on_diag]), minlength=cm.nX)
+    if np.all(np.isfinite(values)) and np.all(diag <= 0.0) and np.all(-diag >= off):
+        return TRIDIAGONAL
+    return fallback
+
+
+def _tridiagonal_jacobian(cm: CompiledModel):
+    """``(J(p), rows, cols)`` when the model's ODE Jacobian is constant in time and
+    states and its pattern with the diagonal added is the full tridiagonal band (what
+    CasADi's ``tridiag`` plug-in indexes), else None; decided once per model."""
+    cached = cm._cache.get("tridiagonal_jacobian")
+    if cached is None:
+        t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
+        z, p = ca.SX.sym("z", cm.nz), ca.SX.sym("p", cm.p0.size)
+        J = ca.jacobian(cm.f_ode(t, X, z, p), X)
+        band = ca.Sparsity.banded(cm.nX, 1)
+        cached = False
+        if (J.sparsity() + ca.Sparsity.diag(cm.nX) == band
+                and not ca.depends_on(J, ca.vertcat(t, X))):
+            rows, cols = (np.asarray(v, dtype=np.int64) for v in J.sparsity().get_triplet())
+            cached = (ca.Function("jac_ode", [p], [J]), rows, cols)
+        cm._cache["tridiagonal_jacobian"] = cached
+    return cached or None
 
 
 def held_states(cm: CompiledModel) -> list[int]:
@@ -130,9 +188,10 @@ def _model(cm: CompiledModel) -> ca.Function:
 
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
                 atol: float, max_step: float | None, drive: tuple = (),
-                linear_solver: str = "auto") -> ca.Function:
+                linear_solver: str = "qr") -> ca.Function:
     # drive: (p slot, table length) of each external input given as a table; the tables
-    # are data of the integrator's parameter vector (see mechatron.solvers.inputs)
+    # are data of the integrator's parameter vector (see mechatron.solvers.inputs);
+    # linear_solver: the CasADi plug-in (not the name simulate takes)
     key = ("var", plugin, grid.size, float(grid[0]), float(grid[-1]), hash(grid.tobytes()),
            rtol, atol, max_step, drive, linear_solver)
     cached = cm._cache.get(key)
@@ -166,7 +225,7 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
         opts["print_stats"] = False
-        opts["linear_solver"] = linear_solver_for(cm, linear_solver)
+        opts["linear_solver"] = linear_solver
     if max_step:
         opts["max_step_size"] = max_step
     if cm.nr:
@@ -181,6 +240,12 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
         opts["calc_ic"] = True
     with _quiet_stderr():
         integ = ca.integrator(f"sim_{cm.name}", plugin, dae, float(grid[0]), grid, opts)
+    if linear_solver == TRIDIAGONAL and not (
+            integ.has_function("jacF") and integ.get_function("jacF").sparsity_out(0)
+            + ca.Sparsity.diag(cm.nX) == ca.Sparsity.banded(cm.nX, 1)):
+        # the plug-in reads three entries per column: only the full band will do
+        return _integrator(cm, plugin, grid, rtol, atol, max_step, drive,
+                           LINEAR_SOLVERS["auto"])
     cm._cache[key] = integ
     return integ
 
@@ -207,7 +272,10 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     drive = inputs.drive if inputs is not None else ()
     if drive:
         p = inputs.integrator_parameters(p)
-    integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive, linear_solver)
+    linsol = linear_solver_for(cm, linear_solver)
+    if linear_solver == "auto":
+        linsol = auto_linear_solver(cm, plugin, p, drive)
+    integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive, linsol)
     pad = 1 if cm.nX == 0 else 0
     # CasADi's buffer interface: the integrator reads and writes NumPy memory directly
     # (a casadi.DM of the trajectory costs more to convert than the integration itself
