@@ -188,19 +188,22 @@ def _model(cm: CompiledModel) -> ca.Function:
 
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
                 atol: float, max_step: float | None, drive: tuple = (),
-                linear_solver: str = "qr") -> ca.Function:
+                linear_solver: str = "qr", shifted: bool = False) -> ca.Function:
     # drive: (p slot, table length) of each external input given as a table; the tables
     # are data of the integrator's parameter vector (see mechatron.solvers.inputs);
-    # linear_solver: the CasADi plug-in (not the name simulate takes)
+    # linear_solver: the CasADi plug-in (not the name simulate takes); shifted: the
+    # integrator runs from 0 over ``grid`` (times after the start of a segment) and
+    # takes the segment's start time as one more parameter, so that one integrator
+    # serves every segment of a chunked run (see integrate_variable)
     key = ("var", plugin, grid.size, float(grid[0]), float(grid[-1]), hash(grid.tobytes()),
-           rtol, atol, max_step, drive, linear_solver)
+           rtol, atol, max_step, drive, linear_solver, shifted)
     cached = cm._cache.get(key)
     if cached is not None:
         return cached
     held = held_states(cm) if plugin == "rosenbrock" else []
     # MX passes input tables as blocks, not elements, and can hide held states from AD
     S = ca.MX if drive or held else ca.SX
-    t = S.sym("t")
+    tau = S.sym("t")
     # SUNDIALS needs at least one state: a model of algebraic equations only gets a
     # constant dummy state (dropped again by integrate_variable)
     pad = 1 if cm.nX == 0 else 0
@@ -208,8 +211,11 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     X = Xi[:cm.nX]
     Xd = _hide(X, held) if held else X     # X as the step's Jacobian sees it
     z = S.sym("z", cm.nz)
-    p = S.sym("p", cm.p0.size + 2 * sum(n for _, n in drive))
-    pe = driven_parameters(cm.p0.size, t, p, drive) if drive else p
+    n_p = cm.p0.size + 2 * sum(n for _, n in drive)
+    p = S.sym("p", n_p + (1 if shifted else 0))
+    t = tau + p[n_p] if shifted else tau      # the model's time
+    pm = p[:n_p] if shifted else p
+    pe = driven_parameters(cm.p0.size, t, pm, drive) if drive else pm
     u = S.sym("u", 0)
     empty = S(0, 1)
     if S is ca.MX:
@@ -221,7 +227,7 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     outs = [ca.vertcat(ode, S.zeros(pad)), alg if cm.nz else empty, empty,
             zero if cm.nr else empty]
     outs = [ca.densify(o) for o in outs]
-    dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
+    dae = ca.Function("dae", [tau, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
         opts["print_stats"] = False
@@ -231,7 +237,7 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     if cm.nr:
         idx = S.sym("index")
         post_x, post_z = cm.f_transition(idx, t, X, z, pe)
-        opts["transition"] = ca.Function("transition", [idx, t, X, z, p, u],
+        opts["transition"] = ca.Function("transition", [idx, tau, X, z, p, u],
                                          [post_x, post_z], ca.event_in(), ca.event_out())
         opts["event_tol"] = 1e-13
         opts["max_events"] = 100_000_000
@@ -239,13 +245,14 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     if plugin == "idas":
         opts["calc_ic"] = True
     with _quiet_stderr():
-        integ = ca.integrator(f"sim_{cm.name}", plugin, dae, float(grid[0]), grid, opts)
+        integ = ca.integrator(f"sim_{cm.name}", plugin, dae,
+                              0.0 if shifted else float(grid[0]), grid, opts)
     if linear_solver == TRIDIAGONAL and not (
             integ.has_function("jacF") and integ.get_function("jacF").sparsity_out(0)
             + ca.Sparsity.diag(cm.nX) == ca.Sparsity.banded(cm.nX, 1)):
         # the plug-in reads three entries per column: only the full band will do
         return _integrator(cm, plugin, grid, rtol, atol, max_step, drive,
-                           LINEAR_SOLVERS["auto"])
+                           LINEAR_SOLVERS["auto"], shifted)
     cm._cache[key] = integ
     return integ
 
@@ -275,7 +282,6 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     linsol = linear_solver_for(cm, linear_solver)
     if linear_solver == "auto":
         linsol = auto_linear_solver(cm, plugin, p, drive)
-    integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive, linsol)
     pad = 1 if cm.nX == 0 else 0
     # CasADi's buffer interface: the integrator reads and writes NumPy memory directly
     # (a casadi.DM of the trajectory costs more to convert than the integration itself
@@ -285,22 +291,97 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     pp = np.ascontiguousarray(p, dtype=float)
     xs = np.empty((grid.size, cm.nX + pad))
     zs = np.empty((grid.size, cm.nz))
-    buf, evaluate = integ.buffer()
-    buf.set_arg(0, memoryview(x0))
-    buf.set_arg(1, memoryview(zz0))
-    buf.set_arg(2, memoryview(pp))
-    buf.set_res(0, memoryview(xs.reshape(-1)))
-    buf.set_res(1, memoryview(zs.reshape(-1)))
+    segments = _segments(grid, cm.nX + pad + cm.nz) if plugin in ("cvodes", "idas") else None
     try:
-        evaluate()
+        if segments is None:
+            integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive, linsol)
+            stats = _run(integ, x0, zz0, pp, xs, zs)
+        else:
+            stats = _run_segments(cm, plugin, grid, segments, rtol, atol, max_step, drive,
+                                  linsol, x0, zz0, pp, xs, zs)
     except RuntimeError as exc:
         cause = _nonfinite_cause(cm, float(grid[0]), X0, z0, p, drive)
         raise SimulationError(_explain(cm, str(exc)) + (f" At the start: {cause}." if cause
                                                         else ""), path=cm.name) from None
     X = xs.T[:cm.nX]      # (nX, n) views, no copies
     Z = zs.T
-    stats = buf.stats()
     return X, Z, stats, plugin
+
+
+#: A variable-step run whose trajectory has more values than this (64 MB) is integrated
+#: over segments of the output grid: a CasADi integrator keeps the sparsity pattern of
+#: its output (one index per value, as many bytes as the trajectory itself, built twice
+#: over while the integrator is made), so one integrator over the whole grid of a large
+#: model would hold a second copy of the trajectory's size for as long as it is cached.
+#: Each segment restarts the solver from the state the previous one ended with (a BDF
+#: restart: order 1 and a fresh initial step), so the results differ from one pass
+#: within the tolerances, and the steps grow by a few per segment.
+SEGMENT_VALUES = 1 << 23
+
+
+def _segments(grid: np.ndarray, width: int) -> list[tuple[int, int]] | None:
+    """``[(a, b), ...]``: the output points ``grid[a..b]`` of each segment of a chunked
+    run (consecutive segments share their end point), or None for one pass. Segments
+    are equal in length but the last, and their times after their start agree to the
+    rounding of the grid's times, so one integrator serves all of them (and one more
+    the shorter last); a grid that is not uniform enough for that runs in one pass."""
+    n = grid.size
+    if width * n <= SEGMENT_VALUES or n < 3:
+        return None
+    per = max(1, SEGMENT_VALUES // width - 1)        # intervals per segment
+    count = -(-(n - 1) // per)
+    per = -(-(n - 1) // count)                       # balanced
+    starts = list(range(0, n - 1, per))
+    bounds = [(a, min(a + per, n - 1)) for a in starts]
+    span = float(np.max(np.abs(grid)))
+    first = grid[1:per + 1] - grid[0]
+    for a, b in bounds:
+        rel = grid[a + 1:b + 1] - grid[a]
+        if np.max(np.abs(rel - first[:b - a])) > 8 * np.finfo(float).eps * span:
+            return None
+    return bounds
+
+
+def _run(integ: ca.Function, x0, z0, p, xs: np.ndarray, zs: np.ndarray) -> dict:
+    """One integrator call through the buffer interface: ``x0, z0, p`` in, the
+    trajectory written into ``xs, zs`` (one row per output time); its statistics."""
+    buf, evaluate = integ.buffer()
+    buf.set_arg(0, memoryview(x0))
+    buf.set_arg(1, memoryview(z0))
+    buf.set_arg(2, memoryview(p))
+    buf.set_res(0, memoryview(xs.reshape(-1)))
+    buf.set_res(1, memoryview(zs.reshape(-1)))
+    evaluate()
+    return buf.stats()
+
+
+#: Counters of CasADi's SUNDIALS statistics that count one call's work (added over the
+#: segments); the others (calls and times of the model's functions) add up over the
+#: integrator's lifetime, so the last segment's are kept.
+_PER_CALL = ("nsteps", "nfevals", "nlinsetups", "netfails", "nniters", "nncfails")
+
+
+def _run_segments(cm: CompiledModel, plugin: str, grid: np.ndarray, segments, rtol: float,
+                  atol: float, max_step, drive, linsol: str, x0, z0, p,
+                  xs: np.ndarray, zs: np.ndarray) -> dict:
+    """Integrate segment by segment into ``xs, zs`` (one integrator per segment length,
+    with the segment's start time as a parameter); each starts from where the previous
+    one ended."""
+    xs[0], zs[0] = x0, z0
+    pt = np.concatenate([p, [0.0]])
+    stats: dict = {}
+    for a, b in segments:
+        tau = grid[a + 1:b + 1] - grid[a]
+        if b - a == segments[0][1]:                     # the same times as the first
+            tau = grid[1:b - a + 1] - grid[0]
+        integ = _integrator(cm, plugin, tau, rtol, atol, max_step, drive, linsol,
+                            shifted=True)
+        pt[-1] = grid[a]
+        st = _run(integ, np.ascontiguousarray(xs[a]), np.ascontiguousarray(zs[a]), pt,
+                  xs[a + 1:b + 1], zs[a + 1:b + 1])
+        for k, v in st.items():
+            stats[k] = stats.get(k, 0) + v if k in _PER_CALL else v
+    return stats
 
 
 def _nonfinite_cause(cm: CompiledModel, t0: float, X0, z0, p, drive) -> str:
