@@ -236,3 +236,15 @@ def test_the_tridiagonal_solver_gives_the_sparse_solvers_solution(cm):
     res = mt.simulate(cm, 0.2, **TIGHT)                   # auto: tridiagonal
     np.testing.assert_allclose(voltages(res, 30), voltages(ref, 30), rtol=0, atol=1e-9)
     assert np.max(np.abs(voltages(res, 30) - exact_voltages(30, res.t))) < 1e-9
+
+
+def test_each_run_reports_its_own_work(cm, monkeypatch):
+    """CasADi counts the Jacobian evaluations over the integrator's lifetime; a run
+    reports its own, and a segmented run the sum over its segments."""
+    first = mt.simulate(cm, 0.1)
+    again = mt.simulate(cm, 0.1)
+    assert again.stats.jac_evals == first.stats.jac_evals > 0
+    assert again.stats.steps == first.stats.steps
+    segmented(monkeypatch, 30 * 200)                     # 1001 points: 6 segments
+    parts = mt.simulate(cm, 0.1)
+    assert parts.stats.jac_evals >= 6 and parts.stats.steps > first.stats.steps

@@ -114,15 +114,19 @@ def auto_linear_solver(cm: CompiledModel, plugin: str, p: np.ndarray,
     if jac is None:
         return fallback
     fn, rows, cols = jac
+    key = np.asarray(p, dtype=float).tobytes()
+    last = cm._cache.get("tridiagonal_p")
+    if last is not None and last[0] == key:
+        return last[1]
     with np.errstate(all="ignore"):
         values = evaluate_point(fn, [np.asarray(p, dtype=float)])
     on_diag = rows == cols
     diag = np.zeros(cm.nX)
     diag[rows[on_diag]] = values[on_diag]
     off = np.bincount(rows[~on_diag], np.abs(values[~on_diag]), minlength=cm.nX)
-    if np.all(np.isfinite(values)) and np.all(diag <= 0.0) and np.all(-diag >= off):
-        return TRIDIAGONAL
-    return fallback
+    safe = np.all(np.isfinite(values)) and np.all(diag <= 0.0) and np.all(-diag >= off)
+    cm._cache["tridiagonal_p"] = (key, TRIDIAGONAL if safe else fallback)
+    return TRIDIAGONAL if safe else fallback
 
 
 def _tridiagonal_jacobian(cm: CompiledModel):
@@ -351,14 +355,26 @@ def _run(integ: ca.Function, x0, z0, p, xs: np.ndarray, zs: np.ndarray) -> dict:
     buf.set_arg(2, memoryview(p))
     buf.set_res(0, memoryview(xs.reshape(-1)))
     buf.set_res(1, memoryview(zs.reshape(-1)))
+    try:
+        before = buf.stats()    # the calls and times of earlier runs (on this memory)
+    except RuntimeError:        # none yet
+        before = {}
     evaluate()
-    return buf.stats()
+    stats = buf.stats()
+    for k, v in before.items():
+        if k.startswith(_LIFETIME) and isinstance(v, (int, float)):
+            stats[k] = stats[k] - v
+    return stats
 
 
-#: Counters of CasADi's SUNDIALS statistics that count one call's work (added over the
-#: segments); the others (calls and times of the model's functions) add up over the
-#: integrator's lifetime, so the last segment's are kept.
-_PER_CALL = ("nsteps", "nfevals", "nlinsetups", "netfails", "nniters", "nncfails")
+#: CasADi's counts and times of the calls of the model's functions (``n_call_jacF``:
+#: Jacobians) add up over the integrator's lifetime: :func:`_run` subtracts what earlier
+#: runs left, so that a run reports its own.
+_LIFETIME = ("n_call_", "t_proc_", "t_wall_")
+#: Statistics that count one call's work, added over the segments of a chunked run (the
+#: others, such as the last step size, are the last segment's).
+_PER_CALL = ("nsteps", "nfevals", "nlinsetups", "netfails", "nniters", "nncfails",
+             "n_steps", "n_reject", "n_rhs", "n_jac")
 
 
 def _run_segments(cm: CompiledModel, plugin: str, grid: np.ndarray, segments, rtol: float,
@@ -380,7 +396,8 @@ def _run_segments(cm: CompiledModel, plugin: str, grid: np.ndarray, segments, rt
         st = _run(integ, np.ascontiguousarray(xs[a]), np.ascontiguousarray(zs[a]), pt,
                   xs[a + 1:b + 1], zs[a + 1:b + 1])
         for k, v in st.items():
-            stats[k] = stats.get(k, 0) + v if k in _PER_CALL else v
+            per_call = k in _PER_CALL or k.startswith(_LIFETIME)
+            stats[k] = stats.get(k, 0) + v if per_call else v
     return stats
 
 
