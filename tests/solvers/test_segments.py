@@ -74,16 +74,23 @@ def test_segments_cover_the_grid_with_equal_lengths_and_a_shorter_last():
     grid = np.linspace(0.0, 0.2, 212)                    # 211 intervals
     assert variable._segments(grid, 30) is None          # small: one pass
     variable_values = 30 * 60
-    bounds = [tuple(b) for b in _with(variable_values, grid, 30)]
+    segments = _with(variable_values, grid, 30)
+    bounds = [(a, b) for a, b, _ in segments]
     assert bounds[0][0] == 0 and bounds[-1][1] == 211
     assert all(a2 == b1 for (_, b1), (a2, _) in zip(bounds, bounds[1:]))
     lengths = [b - a for a, b in bounds]
     assert len(set(lengths[:-1])) == 1 and 0 < lengths[-1] <= lengths[0]
     assert max(lengths) + 1 <= variable_values // 30     # each within the budget
-    # a grid whose spacing varies runs in one pass (one integrator could not serve
-    # every segment)
-    assert _with(variable_values, np.concatenate([grid[:100], grid[100:] ** 1.1]), 30) \
-        is None
+    # two integrators: one for the equal segments, one for the shorter last
+    assert len({id(tau) for _, _, tau in segments}) == 2
+    for a, b, tau in segments:
+        np.testing.assert_allclose(grid[a] + tau, grid[a + 1:b + 1], rtol=0, atol=1e-16)
+    # a first output time after t0 (a first segment of its own) still segments
+    late = np.concatenate([[0.0], np.linspace(0.05, 0.25, 211)])
+    assert len({id(tau) for _, _, tau in _with(variable_values, late, 30)}) == 3
+    # a grid whose spacing keeps changing runs in one pass (each segment would need an
+    # integrator of its own)
+    assert _with(variable_values, grid ** 1.5, 30) is None
 
 
 def _with(values, grid, width):

@@ -323,27 +323,40 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
 SEGMENT_VALUES = 1 << 23
 
 
-def _segments(grid: np.ndarray, width: int) -> list[tuple[int, int]] | None:
-    """``[(a, b), ...]``: the output points ``grid[a..b]`` of each segment of a chunked
-    run (consecutive segments share their end point), or None for one pass. Segments
-    are equal in length but the last, and their times after their start agree to the
-    rounding of the grid's times, so one integrator serves all of them (and one more
-    the shorter last); a grid that is not uniform enough for that runs in one pass."""
+#: Most integrators (distinct times after a segment's start) a chunked run may build:
+#: a grid whose segments need more runs in one pass.
+SEGMENT_KINDS = 3
+
+
+def _segments(grid: np.ndarray, width: int) -> list[tuple[int, int, np.ndarray]] | None:
+    """``[(a, b, tau), ...]``: the output points ``grid[a..b]`` of each segment of a
+    chunked run (consecutive segments share their end point) and their times after the
+    segment's start, ``tau``; or None for one pass. Segments are equal in length but
+    the last; segments whose times after their start agree to the rounding of the
+    grid's times share one ``tau`` (one integrator), as on a uniform grid (with, say, a
+    different first or shorter last segment); a grid that would need more than
+    :data:`SEGMENT_KINDS` integrators runs in one pass."""
     n = grid.size
     if width * n <= SEGMENT_VALUES or n < 3:
         return None
     per = max(1, SEGMENT_VALUES // width - 1)        # intervals per segment
     count = -(-(n - 1) // per)
     per = -(-(n - 1) // count)                       # balanced
-    starts = list(range(0, n - 1, per))
-    bounds = [(a, min(a + per, n - 1)) for a in starts]
-    span = float(np.max(np.abs(grid)))
-    first = grid[1:per + 1] - grid[0]
-    for a, b in bounds:
+    tol = 8 * np.finfo(float).eps * float(np.max(np.abs(grid)))
+    kinds: list[np.ndarray] = []
+    out = []
+    for a in range(0, n - 1, per):
+        b = min(a + per, n - 1)
         rel = grid[a + 1:b + 1] - grid[a]
-        if np.max(np.abs(rel - first[:b - a])) > 8 * np.finfo(float).eps * span:
-            return None
-    return bounds
+        tau = next((k for k in kinds if k.size == rel.size
+                    and np.max(np.abs(k - rel)) <= tol), None)
+        if tau is None:
+            if len(kinds) == SEGMENT_KINDS:
+                return None
+            tau = rel
+            kinds.append(tau)
+        out.append((a, b, tau))
+    return out
 
 
 def _run(integ: ca.Function, x0, z0, p, xs: np.ndarray, zs: np.ndarray) -> dict:
@@ -380,16 +393,13 @@ _PER_CALL = ("nsteps", "nfevals", "nlinsetups", "netfails", "nniters", "nncfails
 def _run_segments(cm: CompiledModel, plugin: str, grid: np.ndarray, segments, rtol: float,
                   atol: float, max_step, drive, linsol: str, x0, z0, p,
                   xs: np.ndarray, zs: np.ndarray) -> dict:
-    """Integrate segment by segment into ``xs, zs`` (one integrator per segment length,
+    """Integrate segment by segment into ``xs, zs`` (one integrator per kind of segment,
     with the segment's start time as a parameter); each starts from where the previous
     one ended."""
     xs[0], zs[0] = x0, z0
     pt = np.concatenate([p, [0.0]])
     stats: dict = {}
-    for a, b in segments:
-        tau = grid[a + 1:b + 1] - grid[a]
-        if b - a == segments[0][1]:                     # the same times as the first
-            tau = grid[1:b - a + 1] - grid[0]
+    for a, b, tau in segments:
         integ = _integrator(cm, plugin, tau, rtol, atol, max_step, drive, linsol,
                             shifted=True)
         pt[-1] = grid[a]
