@@ -4,7 +4,9 @@ Relations are event modes: CasADi locates each zero crossing of ``s * d`` on the
 output and calls the compiled transition function, which flips the mode, counts the event
 and stores its time, all in native code. The integrator for a given output grid and
 tolerances is built once and cached on the compiled model, so a second run with other
-parameters costs only the integration.
+parameters costs only the integration. A large model's run goes over segments of the
+output grid (see :data:`SEGMENT_VALUES`), so that CasADi does not keep an index per value
+of the whole trajectory.
 """
 
 from __future__ import annotations
