@@ -226,6 +226,12 @@ def _rows_ladder_simulate(r: dict) -> list[dict]:
                          f"< {r['goals']['peak_rss_mb_N10000']:g} MB (issue 17)"
                          if n == 10000 else None,
                          row["goal_memory_met"] if n == 10000 else None))
+        if "simulate_increase_mb" in m and "simulate_increase_mb" in base:
+            rows.append(_row(f"RC ladder N={n} simulate, memory the runs add", "MB",
+                             m["simulate_increase_mb"], "SciPy LSODA, the same way",
+                             base["simulate_increase_mb"],
+                             base["simulate_increase_mb"] / m["simulate_increase_mb"]
+                             if m["simulate_increase_mb"] > 0 else None))
     return rows
 
 

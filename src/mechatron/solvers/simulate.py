@@ -119,9 +119,11 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
         every variable.
     linear_solver : {"auto", "sparse", "dense"}
         Linear solver of the Newton iterations of CVODES and IDAS (see
-        :data:`mechatron.solvers.variable.LINEAR_SOLVERS`): ``"auto"`` sparse QR,
-        ``"sparse"`` sparse LU, ``"dense"`` dense LU. The Jacobian's sparsity comes from
-        the compiled model.
+        :data:`mechatron.solvers.variable.LINEAR_SOLVERS`): ``"auto"`` sparse QR, or
+        for CVODES on a linear chain whose Jacobian is tridiagonal and diagonally
+        dominant (an RC ladder) the Thomas algorithm (see
+        :func:`mechatron.solvers.variable.auto_linear_solver`); ``"sparse"`` sparse LU,
+        ``"dense"`` dense LU. The Jacobian's sparsity comes from the compiled model.
     max_memory : float or None
         Largest estimated memory (bytes) of a fixed-step run, which keeps every step: a
         run estimated above it is refused before it starts, with the estimate (default

@@ -4,7 +4,9 @@ Relations are event modes: CasADi locates each zero crossing of ``s * d`` on the
 output and calls the compiled transition function, which flips the mode, counts the event
 and stores its time, all in native code. The integrator for a given output grid and
 tolerances is built once and cached on the compiled model, so a second run with other
-parameters costs only the integration.
+parameters costs only the integration. A large model's run goes over segments of the
+output grid (see :data:`SEGMENT_VALUES`), so that CasADi does not keep an index per value
+of the whole trajectory.
 """
 
 from __future__ import annotations
@@ -19,9 +21,10 @@ import numpy as np
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
 from mechatron.solvers.inputs import driven_parameters
+from mechatron.solvers.logging import evaluate_point
 
 __all__ = ["integrate_variable", "consistent_algebraics", "held_states", "LINEAR_SOLVERS",
-           "linear_solver_for"]
+           "linear_solver_for", "auto_linear_solver"]
 
 #: Newton iterations that polish the algebraic unknowns at the output times
 Z_ITERATIONS = 3
@@ -52,10 +55,15 @@ def _quiet_stderr():
 #: sparse solver factorizes only its nonzeros: on an RC ladder the iteration matrix is
 #: tridiagonal, so a step costs O(N) rather than the O(N^3) of a dense factorization.
 LINEAR_SOLVERS = {
-    "auto": "qr",           # sparse QR (CasADi's own), for any size
+    "auto": "qr",           # sparse QR (CasADi's own), for any size; see auto_linear_solver
     "sparse": "csparse",    # sparse LU with partial pivoting (CSparse)
     "dense": "lapacklu",    # dense LU (LAPACK): every entry, for comparison and tiny models
 }
+
+#: The plug-in ``linear_solver="auto"`` takes for a tridiagonal system it may solve
+#: without pivoting (the Thomas algorithm, O(N) with no fill): see
+#: :func:`auto_linear_solver`.
+TRIDIAGONAL = "tridiag"
 
 PLUGINS = {"cvodes": "cvodes", "bdf": "cvodes", "idas": "idas", "rosenbrock": "rosenbrock",
            "rk45": "erk"}
@@ -84,6 +92,62 @@ def linear_solver_for(cm: CompiledModel, choice: str) -> str:
                               f"one of {', '.join(map(repr, LINEAR_SOLVERS))}.",
                               path=cm.name)
     return plugin
+
+
+def auto_linear_solver(cm: CompiledModel, plugin: str, p: np.ndarray,
+                       drive: tuple = ()) -> str:
+    """The plug-in of ``linear_solver="auto"``: the Thomas algorithm for a CVODES run of
+    a linear, time-invariant ODE whose Jacobian ``J`` is tridiagonal (a chain: an RC
+    ladder, a discretized rod or line) and, at the parameters ``p``, has
+    ``J_ii <= 0`` and ``|J_ii| >= sum_j |J_ij|`` (j != i) in every row; sparse QR
+    otherwise.
+
+    CVODES solves ``(I - gamma J) d = r`` with ``gamma > 0``. Under those conditions
+    that matrix is strictly diagonally dominant by rows for every ``gamma``, which is
+    what the Thomas algorithm (elimination without pivoting) needs to be stable and
+    never meet a zero pivot; a linear model's ``J`` does not change along the run, so
+    checking it once at ``p`` covers every step. Anything else (a DAE, events,
+    inputs given as tables, a Jacobian that depends on the states or on time, a band
+    wider than one, a row that is not dominant) keeps the general sparse QR."""
+    fallback = LINEAR_SOLVERS["auto"]
+    if plugin != "cvodes" or cm.nz or cm.nr or drive or cm.nX < 3:
+        return fallback
+    jac = _tridiagonal_jacobian(cm)
+    if jac is None:
+        return fallback
+    fn, rows, cols = jac
+    key = np.asarray(p, dtype=float).tobytes()
+    last = cm._cache.get("tridiagonal_p")
+    if last is not None and last[0] == key:
+        return last[1]
+    with np.errstate(all="ignore"):
+        values = evaluate_point(fn, [np.asarray(p, dtype=float)])
+    on_diag = rows == cols
+    diag = np.zeros(cm.nX)
+    diag[rows[on_diag]] = values[on_diag]
+    off = np.bincount(rows[~on_diag], np.abs(values[~on_diag]), minlength=cm.nX)
+    safe = np.all(np.isfinite(values)) and np.all(diag <= 0.0) and np.all(-diag >= off)
+    cm._cache["tridiagonal_p"] = (key, TRIDIAGONAL if safe else fallback)
+    return TRIDIAGONAL if safe else fallback
+
+
+def _tridiagonal_jacobian(cm: CompiledModel):
+    """``(J(p), rows, cols)`` when the model's ODE Jacobian is constant in time and
+    states and its pattern with the diagonal added is the full tridiagonal band (what
+    CasADi's ``tridiag`` plug-in indexes), else None; decided once per model."""
+    cached = cm._cache.get("tridiagonal_jacobian")
+    if cached is None:
+        t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
+        z, p = ca.SX.sym("z", cm.nz), ca.SX.sym("p", cm.p0.size)
+        J = ca.jacobian(cm.f_ode(t, X, z, p), X)
+        band = ca.Sparsity.banded(cm.nX, 1)
+        cached = False
+        if (J.sparsity() + ca.Sparsity.diag(cm.nX) == band
+                and not ca.depends_on(J, ca.vertcat(t, X))):
+            rows, cols = (np.asarray(v, dtype=np.int64) for v in J.sparsity().get_triplet())
+            cached = (ca.Function("jac_ode", [p], [J]), rows, cols)
+        cm._cache["tridiagonal_jacobian"] = cached
+    return cached or None
 
 
 def held_states(cm: CompiledModel) -> list[int]:
@@ -130,18 +194,22 @@ def _model(cm: CompiledModel) -> ca.Function:
 
 def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
                 atol: float, max_step: float | None, drive: tuple = (),
-                linear_solver: str = "auto") -> ca.Function:
+                linear_solver: str = "qr", shifted: bool = False) -> ca.Function:
     # drive: (p slot, table length) of each external input given as a table; the tables
-    # are data of the integrator's parameter vector (see mechatron.solvers.inputs)
+    # are data of the integrator's parameter vector (see mechatron.solvers.inputs);
+    # linear_solver: the CasADi plug-in (not the name simulate takes); shifted: the
+    # integrator runs from 0 over ``grid`` (times after the start of a segment) and
+    # takes the segment's start time as one more parameter, so that one integrator
+    # serves every segment of a chunked run (see integrate_variable)
     key = ("var", plugin, grid.size, float(grid[0]), float(grid[-1]), hash(grid.tobytes()),
-           rtol, atol, max_step, drive, linear_solver)
+           rtol, atol, max_step, drive, linear_solver, shifted)
     cached = cm._cache.get(key)
     if cached is not None:
         return cached
     held = held_states(cm) if plugin == "rosenbrock" else []
     # MX passes input tables as blocks, not elements, and can hide held states from AD
     S = ca.MX if drive or held else ca.SX
-    t = S.sym("t")
+    tau = S.sym("t")
     # SUNDIALS needs at least one state: a model of algebraic equations only gets a
     # constant dummy state (dropped again by integrate_variable)
     pad = 1 if cm.nX == 0 else 0
@@ -149,8 +217,11 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     X = Xi[:cm.nX]
     Xd = _hide(X, held) if held else X     # X as the step's Jacobian sees it
     z = S.sym("z", cm.nz)
-    p = S.sym("p", cm.p0.size + 2 * sum(n for _, n in drive))
-    pe = driven_parameters(cm.p0.size, t, p, drive) if drive else p
+    n_p = cm.p0.size + 2 * sum(n for _, n in drive)
+    p = S.sym("p", n_p + (1 if shifted else 0))
+    t = tau + p[n_p] if shifted else tau      # the model's time
+    pm = p[:n_p] if shifted else p
+    pe = driven_parameters(cm.p0.size, t, pm, drive) if drive else pm
     u = S.sym("u", 0)
     empty = S(0, 1)
     if S is ca.MX:
@@ -162,17 +233,17 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     outs = [ca.vertcat(ode, S.zeros(pad)), alg if cm.nz else empty, empty,
             zero if cm.nr else empty]
     outs = [ca.densify(o) for o in outs]
-    dae = ca.Function("dae", [t, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
+    dae = ca.Function("dae", [tau, Xi, z, p, u], outs, ca.dyn_in(), ca.dyn_out())
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000}
     if plugin in ("cvodes", "idas"):
         opts["print_stats"] = False
-        opts["linear_solver"] = linear_solver_for(cm, linear_solver)
+        opts["linear_solver"] = linear_solver
     if max_step:
         opts["max_step_size"] = max_step
     if cm.nr:
         idx = S.sym("index")
         post_x, post_z = cm.f_transition(idx, t, X, z, pe)
-        opts["transition"] = ca.Function("transition", [idx, t, X, z, p, u],
+        opts["transition"] = ca.Function("transition", [idx, tau, X, z, p, u],
                                          [post_x, post_z], ca.event_in(), ca.event_out())
         opts["event_tol"] = 1e-13
         opts["max_events"] = 100_000_000
@@ -180,7 +251,14 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     if plugin == "idas":
         opts["calc_ic"] = True
     with _quiet_stderr():
-        integ = ca.integrator(f"sim_{cm.name}", plugin, dae, float(grid[0]), grid, opts)
+        integ = ca.integrator(f"sim_{cm.name}", plugin, dae,
+                              0.0 if shifted else float(grid[0]), grid, opts)
+    if linear_solver == TRIDIAGONAL and not (
+            integ.has_function("jacF") and integ.get_function("jacF").sparsity_out(0)
+            + ca.Sparsity.diag(cm.nX) == ca.Sparsity.banded(cm.nX, 1)):
+        # the plug-in reads three entries per column: only the full band will do
+        return _integrator(cm, plugin, grid, rtol, atol, max_step, drive,
+                           LINEAR_SOLVERS["auto"], shifted)
     cm._cache[key] = integ
     return integ
 
@@ -207,7 +285,9 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     drive = inputs.drive if inputs is not None else ()
     if drive:
         p = inputs.integrator_parameters(p)
-    integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive, linear_solver)
+    linsol = linear_solver_for(cm, linear_solver)
+    if linear_solver == "auto":
+        linsol = auto_linear_solver(cm, plugin, p, drive)
     pad = 1 if cm.nX == 0 else 0
     # CasADi's buffer interface: the integrator reads and writes NumPy memory directly
     # (a casadi.DM of the trajectory costs more to convert than the integration itself
@@ -217,22 +297,120 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     pp = np.ascontiguousarray(p, dtype=float)
     xs = np.empty((grid.size, cm.nX + pad))
     zs = np.empty((grid.size, cm.nz))
-    buf, evaluate = integ.buffer()
-    buf.set_arg(0, memoryview(x0))
-    buf.set_arg(1, memoryview(zz0))
-    buf.set_arg(2, memoryview(pp))
-    buf.set_res(0, memoryview(xs.reshape(-1)))
-    buf.set_res(1, memoryview(zs.reshape(-1)))
+    segments = _segments(grid, cm.nX + pad + cm.nz) if plugin in ("cvodes", "idas") else None
     try:
-        evaluate()
+        if segments is None:
+            integ = _integrator(cm, plugin, grid, rtol, atol, max_step, drive, linsol)
+            stats = _run(integ, x0, zz0, pp, xs, zs)
+        else:
+            stats = _run_segments(cm, plugin, grid, segments, rtol, atol, max_step, drive,
+                                  linsol, x0, zz0, pp, xs, zs)
     except RuntimeError as exc:
         cause = _nonfinite_cause(cm, float(grid[0]), X0, z0, p, drive)
         raise SimulationError(_explain(cm, str(exc)) + (f" At the start: {cause}." if cause
                                                         else ""), path=cm.name) from None
     X = xs.T[:cm.nX]      # (nX, n) views, no copies
     Z = zs.T
-    stats = buf.stats()
     return X, Z, stats, plugin
+
+
+#: A variable-step run whose trajectory has more values than this (64 MB) is integrated
+#: over segments of the output grid: a CasADi integrator keeps the sparsity pattern of
+#: its output (one index per value, as many bytes as the trajectory itself, built twice
+#: over while the integrator is made), so one integrator over the whole grid of a large
+#: model would hold a second copy of the trajectory's size for as long as it is cached.
+#: Each segment restarts the solver from the state the previous one ended with (a BDF
+#: restart: order 1 and a fresh initial step), so the results differ from one pass
+#: within the tolerances, and the steps grow by a few per segment.
+SEGMENT_VALUES = 1 << 23
+
+
+#: Most integrators (distinct times after a segment's start) a chunked run may build:
+#: a grid whose segments need more runs in one pass.
+SEGMENT_KINDS = 3
+
+
+def _segments(grid: np.ndarray, width: int) -> list[tuple[int, int, np.ndarray]] | None:
+    """``[(a, b, tau), ...]``: the output points ``grid[a..b]`` of each segment of a
+    chunked run (consecutive segments share their end point) and their times after the
+    segment's start, ``tau``; or None for one pass. Segments are equal in length but
+    the last; segments whose times after their start agree to the rounding of the
+    grid's times share one ``tau`` (one integrator), as on a uniform grid (with, say, a
+    different first or shorter last segment); a grid that would need more than
+    :data:`SEGMENT_KINDS` integrators runs in one pass."""
+    n = grid.size
+    if width * n <= SEGMENT_VALUES or n < 3:
+        return None
+    per = max(1, SEGMENT_VALUES // width - 1)        # intervals per segment
+    count = -(-(n - 1) // per)
+    per = -(-(n - 1) // count)                       # balanced
+    tol = 8 * np.finfo(float).eps * float(np.max(np.abs(grid)))
+    kinds: list[np.ndarray] = []
+    out = []
+    for a in range(0, n - 1, per):
+        b = min(a + per, n - 1)
+        rel = grid[a + 1:b + 1] - grid[a]
+        tau = next((k for k in kinds if k.size == rel.size
+                    and np.max(np.abs(k - rel)) <= tol), None)
+        if tau is None:
+            if len(kinds) == SEGMENT_KINDS:
+                return None
+            tau = rel
+            kinds.append(tau)
+        out.append((a, b, tau))
+    return out
+
+
+def _run(integ: ca.Function, x0, z0, p, xs: np.ndarray, zs: np.ndarray) -> dict:
+    """One integrator call through the buffer interface: ``x0, z0, p`` in, the
+    trajectory written into ``xs, zs`` (one row per output time); its statistics."""
+    buf, evaluate = integ.buffer()
+    buf.set_arg(0, memoryview(x0))
+    buf.set_arg(1, memoryview(z0))
+    buf.set_arg(2, memoryview(p))
+    buf.set_res(0, memoryview(xs.reshape(-1)))
+    buf.set_res(1, memoryview(zs.reshape(-1)))
+    try:
+        before = buf.stats()    # the calls and times of earlier runs (on this memory)
+    except RuntimeError:        # none yet
+        before = {}
+    evaluate()
+    stats = buf.stats()
+    for k, v in before.items():
+        if k.startswith(_LIFETIME) and isinstance(v, (int, float)):
+            stats[k] = stats[k] - v
+    return stats
+
+
+#: CasADi's counts and times of the calls of the model's functions (``n_call_jacF``:
+#: Jacobians) add up over the integrator's lifetime: :func:`_run` subtracts what earlier
+#: runs left, so that a run reports its own.
+_LIFETIME = ("n_call_", "t_proc_", "t_wall_")
+#: Statistics that count one call's work, added over the segments of a chunked run (the
+#: others, such as the last step size, are the last segment's).
+_PER_CALL = ("nsteps", "nfevals", "nlinsetups", "netfails", "nniters", "nncfails",
+             "n_steps", "n_reject", "n_rhs", "n_jac")
+
+
+def _run_segments(cm: CompiledModel, plugin: str, grid: np.ndarray, segments, rtol: float,
+                  atol: float, max_step, drive, linsol: str, x0, z0, p,
+                  xs: np.ndarray, zs: np.ndarray) -> dict:
+    """Integrate segment by segment into ``xs, zs`` (one integrator per kind of segment,
+    with the segment's start time as a parameter); each starts from where the previous
+    one ended."""
+    xs[0], zs[0] = x0, z0
+    pt = np.concatenate([p, [0.0]])
+    stats: dict = {}
+    for a, b, tau in segments:
+        integ = _integrator(cm, plugin, tau, rtol, atol, max_step, drive, linsol,
+                            shifted=True)
+        pt[-1] = grid[a]
+        st = _run(integ, np.ascontiguousarray(xs[a]), np.ascontiguousarray(zs[a]), pt,
+                  xs[a + 1:b + 1], zs[a + 1:b + 1])
+        for k, v in st.items():
+            per_call = k in _PER_CALL or k.startswith(_LIFETIME)
+            stats[k] = stats.get(k, 0) + v if per_call else v
+    return stats
 
 
 def _nonfinite_cause(cm: CompiledModel, t0: float, X0, z0, p, drive) -> str:
