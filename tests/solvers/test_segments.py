@@ -19,24 +19,9 @@ import mechatron as mt
 from mechatron.library import electrical as el
 from mechatron.solvers import variable
 
-R, C, V = 1.0, 1e-3, 1.0
+from tests.solvers.test_logging import C, R, V, ladder  # noqa: F401 (the same ladder)
+
 TIGHT = {"rtol": 1e-10, "atol": 1e-12}
-
-
-def ladder(n: int) -> mt.System:
-    m = mt.System(f"ladder_{n}")
-    src = m.add("src", el.DCVoltageSource(V=V))
-    gnd = m.add("gnd", el.ElectricalReference())
-    m.connect(src.n, gnd.port)
-    node = src.p
-    for k in range(n):
-        r = m.add(f"r{k}", el.Resistor(R=R))
-        c = m.add(f"c{k}", el.Capacitor(C=C))
-        m.connect(node, r.p)
-        m.connect(r.n, c.p)
-        m.connect(c.n, gnd.port)
-        node = r.n
-    return m
 
 
 def ladder_matrix(n: int, r: float = R) -> tuple[np.ndarray, np.ndarray]:
