@@ -57,35 +57,71 @@ def _external_blocks(model: Component) -> list[dict]:
     return out
 
 
-def _logged_expressions(flat, alias) -> list:
-    """Every variable of the model as an expression of the unknowns: itself, or a scaled
-    representative or a constant when alias elimination removed it. Scaled in bulk (one
-    element-wise product, one constant vector), not one CasADi call per alias."""
-    out: list = []
-    scaled, reps, factors = [], [], []
-    constant, values = [], []
+def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
+    """Every logged variable: names, units, docs, and the column of their expressions in
+    the unknowns, formed in bulk as one sparse matrix times the model's stacked variable
+    symbols plus constants (no CasADi call per variable). A variable is itself, a scaled
+    representative or a constant where alias elimination removed it, and a variable of
+    a folded subsystem port (:mod:`mechatron.compiler.folding`) the sum of its terms,
+    each read the same way; folded ones stand where their ports are declared."""
+    variables = flat.variables
+    index = {n: k for k, n in enumerate(variables)}
     eliminated = alias.eliminated
-    for j, n in enumerate(flat.variables):
+    names, units, docs = [], [], []
+    rows, cols, vals = [], [], []
+    constant: list[float] = []
+
+    def add(name, unit, doc, terms) -> None:
+        r = len(names)
+        names.append(name)
+        units.append(unit)
+        docs.append(doc)
+        offset = 0.0
+        entries: dict[int, float] = {}      # terms of one representative add up
+        for n, c in terms:
+            rep, k = eliminated.get(n, (n, 1.0))
+            if rep is None:
+                offset += c * k
+            else:
+                j = index[rep]
+                entries[j] = entries.get(j, 0.0) + c * k
+        for j, v in entries.items():
+            rows.append(r)
+            cols.append(j)
+            vals.append(v)
+        constant.append(offset)
+
+    folded = sorted(flat.folded_variables(), key=lambda f: f[3])
+    k = 0
+    for j, (n, var) in enumerate(variables.items()):
+        while k < len(folded) and folded[k][3] <= j:
+            name, unit, doc, _, terms = folded[k]
+            add(name, unit, doc, terms)
+            k += 1
         e = eliminated.get(n)
+        r = len(names)
+        names.append(n)
+        units.append(var.unit)
+        docs.append(var.doc)
         if e is None:
-            out.append(flat.variables[n].sym)
-            continue
-        out.append(None)
-        if e[0] is None:
-            constant.append(j)
-            values.append(e[1])
+            rows.append(r)
+            cols.append(j)
+            vals.append(1.0)
+            constant.append(0.0)
+        elif e[0] is None:
+            constant.append(e[1])
         else:
-            scaled.append(j)
-            reps.append(e[0])
-            factors.append(e[1])
-    if scaled:
-        exprs = ca.vertsplit(ca.times(ca.SX(ca.DM(factors)), flat.stack_variables(reps)))
-        for j, e in zip(scaled, exprs):
-            out[j] = e
-    if constant:
-        for j, e in zip(constant, ca.vertsplit(ca.SX(ca.DM(values)))):
-            out[j] = e
-    return out
+            rows.append(r)
+            cols.append(index[e[0]])
+            vals.append(e[1])
+            constant.append(0.0)
+    for name, unit, doc, _, terms in folded[k:]:
+        add(name, unit, doc, terms)
+    if not names:
+        return names, units, docs, ca.SX(0, 1)
+    M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), len(variables))
+    column = ca.mtimes(M, flat.stack_variables()) + ca.DM(constant)
+    return names, units, docs, ca.densify(column)
 
 
 def _compile(model: Component, name: str | None, dimensions: bool = True) -> CompiledModel:
@@ -161,23 +197,23 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     lap("structure")
 
     # every logged variable as an expression of the unknowns
-    names, out_expr, units, docs = _with_folded(flat, alias, list(flat.variables),
-                                                _logged_expressions(flat, alias))
+    names, units, docs, out_col = _logged(flat, alias)
     dists = [r.d for r in relations]
-    n_ode, n_res, n_out = len(low.ode), len(low.residuals), len(out_expr)
+    n_ode, n_res = len(low.ode), len(low.residuals)
     shadow = ca.SX.sym("pre_x", len(low.states))
     bind_pre(plan, flat, alias, list(low.states), shadow)
     ini = _initial_residuals(flat, alias)
     n_ini = len(ini)
-    n_dist = n_ode + n_res + n_out
-    pile = list(low.ode) + list(low.residuals) + out_expr + dists + ini + plan.exprs
+    n_dist = n_ode + n_res
+    # the logged variables ride along as one column, last
+    pile = list(low.ode) + list(low.residuals) + dists + ini + plan.exprs + [out_col]
     if low.assigned:
         _, pile = ca.substitute_inplace(low.assigned, low.assigned_expr, pile, False)
     if plan:   # action right-hand sides: relations read directly, not through modes
         n_act = len(plan.exprs)
-        plan.exprs = direct_relations(pile[len(pile) - n_act:], relations,
+        plan.exprs = direct_relations(pile[len(pile) - 1 - n_act:-1], relations,
                                       pile[n_dist:n_dist + len(dists)])
-        pile = pile[:len(pile) - n_act]
+        pile = pile[:len(pile) - 1 - n_act] + pile[-1:]
     # bind relation placeholders to modes
     modes = ca.SX.sym("mode", len(relations))
     counters = ca.SX.sym("events", len(relations))
@@ -188,9 +224,9 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         pile = ca.substitute(pile, [r.placeholder for r in relations], values)
     ode = pile[:n_ode]
     res = pile[n_ode:n_ode + n_res]
-    outs = pile[n_ode + n_res:n_ode + n_res + n_out]
     dist = pile[n_dist:n_dist + len(dists)]
-    ini = pile[n_dist + len(dists):]
+    ini = pile[n_dist + len(dists):-1]
+    out_col = pile[-1]
     for k, d_clock in clock_distances(plan, relations, ctx.time, counters).items():
         dist[k] = d_clock
 
@@ -205,7 +241,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     f_ode = ca.Function("ode", args, [xdot], argn, ["ode"])
     f_alg = ca.Function("alg", args, [ca.vertcat(*res) if res else ca.SX(0, 1)], argn,
                         ["alg"])
-    f_out = ca.Function("out", args, [ca.vertcat(*outs) if outs else ca.SX(0, 1)], argn,
+    f_out = ca.Function("out", args, [out_col], argn,
                         ["y"])
     dvec = ca.vertcat(*dist) if dist else ca.SX(0, 1)
     # time derivative of the distances along the trajectory: decides a mode whose distance
@@ -291,58 +327,6 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         input_defaults=[_input_default(flat, q.name) for q in params if q.is_input])
     timings["total"] = sum(timings.values())
     return cm
-
-
-def _with_folded(flat, alias, names: list, exprs: list) -> tuple[list, list, list, list]:
-    """The logged names, expressions, units and docs, with the variables of folded
-    subsystem ports (:mod:`mechatron.compiler.folding`) in their places of declaration.
-    Each is a signed sum of model variables, read through alias elimination: one sparse
-    product with a slice of the stacked symbols for all of them, plus constants."""
-    variables = flat.variables
-    if not flat.folded:
-        return (names, exprs, [variables[n].unit for n in names],
-                [variables[n].doc for n in names])
-    eliminated = alias.eliminated
-    column: dict[str, int] = {}
-    entries: dict[tuple[int, int], float] = {}  # terms of one representative add up
-    constant = []
-    folded = sorted(flat.folded_variables(), key=lambda f: f[3])
-    for r, (_, _, _, _, terms) in enumerate(folded):
-        offset = 0.0
-        for n, c in terms:
-            rep, k = eliminated.get(n, (n, 1.0))
-            if rep is None:
-                offset += c * k
-                continue
-            key = (r, column.setdefault(rep, len(column)))
-            entries[key] = entries.get(key, 0.0) + c * k
-        constant.append(offset)
-    rows, cols = zip(*entries) if entries else ((), ())
-    A = ca.DM.triplet(list(rows), list(cols), ca.DM(list(entries.values())),
-                      len(folded), len(column))
-    values = ca.densify(ca.mtimes(A, flat.stack_variables(column)) + ca.DM(constant)) \
-        if column else ca.SX(ca.DM(constant))
-    values = ca.vertsplit(values)
-    units = [variables[n].unit for n in names]
-    docs = [variables[n].doc for n in names]
-    columns = (names, exprs, units, docs)
-    out = ([], [], [], [])
-    start = k = 0
-    while k < len(folded):          # the variables of the ports declared at one place
-        position = folded[k][3]
-        end = k + 1
-        while end < len(folded) and folded[end][3] == position:
-            end += 1
-        part = folded[k:end]
-        inserted = ([f[0] for f in part], values[k:end], [f[1] for f in part],
-                    [f[2] for f in part])
-        for o, c, items in zip(out, columns, inserted):
-            o.extend(c[start:position])
-            o.extend(items)
-        start, k = position, end
-    for o, c in zip(out, columns):
-        o.extend(c[start:])
-    return out
 
 
 def _initial_residuals(flat, alias) -> list:
