@@ -18,7 +18,7 @@ import numpy as np
 
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
-from mechatron.compiler.linear import Combined, owner_of, reveal
+from mechatron.compiler.linear import Combined, owner_of, reveal, sparse_jacobian
 from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
 
@@ -45,10 +45,12 @@ class Lowered:
     n_unknowns: int = 0
 
 
-def _csr(expr: ca.SX, syms: ca.SX) -> list[list[int]]:
+def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity]:
+    """The incidence of ``expr`` in ``syms`` as rows of column indices, and the sparsity
+    of the Jacobian it comes from."""
     sp = ca.jacobian_sparsity(expr, syms)
     ptr, col = sp.get_crs()
-    return [list(col[ptr[r]:ptr[r + 1]]) for r in range(sp.size1())]
+    return [col[ptr[r]:ptr[r + 1]] for r in range(sp.size1())], sp
 
 
 class _Singular(StructuralError):
@@ -157,7 +159,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     if res:
         res_vec, var_vec = stacked if stacked is not None else (ca.vertcat(*res),
                                                                 ca.vertcat(*var_syms))
-    adj = _csr(res_vec, var_vec) if res else []
+    adj, pattern = _csr(res_vec, var_vec) if res else ([], None)
     # derivative symbols that appear nowhere do not make their variable a state
     used = set(v for row in adj for v in row)
     for i, d in enumerate(var_to_diff):
@@ -169,7 +171,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # constraints hidden in the linear network equations (a cut set of current sources
     # and inductors, a loop of voltage sources and capacitors) are exposed first
     reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
-                       classes, parameters, stacked=(res_vec, var_vec) if res else None)
+                       classes, parameters, stacked=(res_vec, var_vec) if res else None,
+                       sparsity=pattern)
     try:
         ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
     except StructuralError as exc:
@@ -284,8 +287,14 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     def solvable(e: int, v: int) -> bool:
         return coefficient(e, v) is not None
 
-    bulk = _solve_singles(res, var_syms, [(b.equations[0], b.variables[0]) for b in blocks
-                                          if len(b.equations) == 1])
+    # the given equations and their Jacobian (from `reveal`) serve the one-equation
+    # blocks, unless index reduction replaced or added equations among them
+    singles = [(b.equations[0], b.variables[0]) for b in blocks if len(b.equations) == 1]
+    given = None
+    if res and reduction.jacobian is not None and all(
+            e < n_orig and e not in reduced and v < var_vec.numel() for e, v in singles):
+        given = (res_vec, var_vec, reduction.jacobian)
+    bulk = _solve_singles(res, var_syms, singles, given)
     for block in blocks:
         eqs, vs = block.equations, block.variables
         out.largest_block = max(out.largest_block, len(eqs))
@@ -476,7 +485,8 @@ def _is_symbol(expr: ca.SX, name: str) -> bool:
 
 
 def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
-                   singles: list[tuple[int, int]]) -> dict[int, ca.SX]:
+                   singles: list[tuple[int, int]],
+                   given: tuple[ca.SX, ca.SX, ca.SX] | None = None) -> dict[int, ca.SX]:
     """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
     them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
     where ``J = de/dx`` is free of ``x`` and not 0.
@@ -486,12 +496,32 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     coloured so that no equation holds the variable of another block of its colour
     (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
     takes one substitution. Returns ``{e: expression of x}``; the others (not linear
-    in their variable) are left to the equation-by-equation path."""
+    in their variable) are left to the equation-by-equation path.
+
+    ``given = (R, V, J)``: the residuals and variables stacked, and the Jacobian of R in
+    V; each block's equation is then a row of R, its variable a row of V, and ``J`` is
+    read instead of differentiated again."""
     n = len(singles)
     if n < 2:
         return {}
-    E = ca.vertcat(*[res[e] for e, _ in singles])
-    X = ca.vertcat(*[var_syms[v] for _, v in singles])
+    es = [e for e, _ in singles]
+    vs = [v for _, v in singles]
+    if given is not None:
+        R, V, J = given
+        E, X = R[es], V[vs]
+        # J's nonzeros in column-major order: their keys col * rows + row are sorted
+        r_nz, c_nz = (np.asarray(a, dtype=np.int64) for a in J.sparsity().get_triplet())
+        keys = c_nz * J.size1() + r_nz
+        want = np.asarray(vs, dtype=np.int64) * J.size1() + np.asarray(es, dtype=np.int64)
+        at = np.minimum(np.searchsorted(keys, want), max(keys.size - 1, 0))
+        hit = np.flatnonzero(keys[at] == want) if keys.size else np.zeros(0, np.int64)
+        d = ca.SX.zeros(n)
+        if hit.size:
+            d[hit.tolist()] = J.nz[at[hit].tolist()]
+    else:
+        E = ca.vertcat(*[res[e] for e in es])
+        X = ca.vertcat(*[var_syms[v] for v in vs])
+        d = ca.diag(sparse_jacobian(E, X))
     rows, cols = ca.jacobian_sparsity(E, X).get_triplet()
     holds: list[list[int]] = [[] for _ in range(n)]     # other blocks' variables in i
     held: list[list[int]] = [[] for _ in range(n)]      # blocks whose equation holds x_i
@@ -499,7 +529,6 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         if r != c:
             holds[r].append(c)
             held[c].append(r)
-    d = ca.diag(ca.jacobian(E, X))
     bad = set(ca.jacobian_sparsity(d, X).get_triplet()[0])   # J depends on the variable
     dz = ca.vertsplit(d)
     colour = [-1] * n
