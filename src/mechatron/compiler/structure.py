@@ -193,7 +193,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         base = ir.var_to_diff.index(v)
         var_syms.append(ca.SX.sym(f"der({var_names[base]})"))
         var_names.append(f"der({var_names[base]})")
-    sym_index = {s.name(): i for i, s in enumerate(var_syms)}
+    sym_index = ({s.name(): i for i, s in enumerate(var_syms)}
+                 if len(ir.adj) > len(res) else {})
     for e in range(len(res), len(ir.adj)):
         src = ir.eq_to_diff.index(e)
         res.append(_time_derivative(res[src], var_syms, sym_index, ir.var_to_diff, time))
@@ -272,7 +273,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                   differentiated=differentiated, n_blocks=len(blocks),
                   n_equations=len(res), n_unknowns=sum(allowed))
     coef_cache: dict[tuple[int, int], ca.SX | None] = {}
-    unknown_names = {x.name() for x in var_syms}
+    unknown_names = _OnFirstUse(lambda: {x.name() for x in var_syms})   # loops only
 
     def coefficient(e: int, v: int):
         """d res[e] / d v when res[e] is linear in v with a nonzero coefficient, else None."""
@@ -291,8 +292,9 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # blocks, unless index reduction replaced or added equations among them
     singles = [(b.equations[0], b.variables[0]) for b in blocks if len(b.equations) == 1]
     given = None
+    n_given = var_vec.numel() if res else 0
     if res and reduction.jacobian is not None and all(
-            e < n_orig and e not in reduced and v < var_vec.numel() for e, v in singles):
+            e < n_orig and e not in reduced and v < n_given for e, v in singles):
         given = (res_vec, var_vec, reduction.jacobian)
     bulk = _solve_singles(res, var_syms, singles, given)
     for block in blocks:
@@ -581,8 +583,20 @@ def _solve_linear(r: ca.SX, x: ca.SX, coef: ca.SX) -> ca.SX:
     return -rest / coef
 
 
+class _OnFirstUse:
+    """A set built on its first membership test."""
+
+    def __init__(self, build):
+        self._build, self._set = build, None
+
+    def __contains__(self, item) -> bool:
+        if self._set is None:
+            self._set = self._build()
+        return item in self._set
+
+
 def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, coefficient,
-                 unknown_names: set[str]) -> None:
+                 unknown_names) -> None:
     # the sequence divides by its coefficients: only those free of unknowns are safe (a
     # coefficient such as sin(q) of a rigid link vanishes in some configurations and
     # would turn a nonsingular loop into 0/0); the loop's linear part is then solved by
