@@ -524,28 +524,32 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         E = ca.vertcat(*[res[e] for e in es])
         X = ca.vertcat(*[var_syms[v] for v in vs])
         d = ca.diag(sparse_jacobian(E, X))
-    rows, cols = ca.jacobian_sparsity(E, X).get_triplet()
-    holds: list[list[int]] = [[] for _ in range(n)]     # other blocks' variables in i
-    held: list[list[int]] = [[] for _ in range(n)]      # blocks whose equation holds x_i
-    for r, c in zip(rows, cols):
-        if r != c:
-            holds[r].append(c)
-            held[c].append(r)
-    bad = set(ca.jacobian_sparsity(d, X).get_triplet()[0])   # J depends on the variable
-    dz = ca.vertsplit(d)
+    # blocks i and j clash when the equation of one holds the variable of the other; in
+    # the greedy colouring (in block order) only the earlier of the two looks at it
+    r, c = (np.asarray(a, dtype=np.int64) for a in ca.jacobian_sparsity(E, X).get_triplet())
+    a, b = np.concatenate([r, c]), np.concatenate([c, r])
+    keep = b < a
+    a, b = a[keep], b[keep]
+    order = np.argsort(a, kind="stable")
+    ptr = np.searchsorted(a[order], np.arange(n + 1)).tolist()
+    earlier = b[order].tolist()
+    # a block is left out when its coefficient J is 0 or depends on a variable
+    usable = np.zeros(n, dtype=bool)
+    usable[ca.sparsify(d).sparsity().get_triplet()[0]] = True
+    usable[ca.jacobian_sparsity(d, X).get_triplet()[0]] = False
     colour = [-1] * n
     classes: list[list[int]] = []
-    for i in range(n):
-        if i in bad or dz[i].is_zero():
-            continue
-        taken = {colour[k] for k in holds[i]} | {colour[k] for k in held[i]}
-        c = 0
-        while c in taken:
-            c += 1
-        colour[i] = c
-        if c == len(classes):
+    for i in np.flatnonzero(usable).tolist():
+        lo, hi = ptr[i], ptr[i + 1]
+        k = 0
+        if lo < hi:
+            taken = {colour[j] for j in earlier[lo:hi]}
+            while k in taken:
+                k += 1
+        colour[i] = k
+        if k == len(classes):
             classes.append([])
-        classes[c].append(i)
+        classes[k].append(i)
     out: dict[int, ca.SX] = {}
     for idx in classes:
         # slices of the stacked vectors (indexing by a list of ints stays in C++; a
