@@ -199,19 +199,17 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     rows, cols = jac.sparsity().get_triplet()
     const: list[set[int]] = [set() for _ in res]
     linear: list[dict] = [{} for _ in res]
-    nonzeros = jac.nonzeros()
-    symbolic = []
-    for k, z in enumerate(nonzeros):
-        if z.is_constant():
-            const[rows[k]].add(cols[k])
-            value = float(z)
-            if value:
-                linear[rows[k]][cols[k]] = exact(value)
-        else:
-            symbolic.append(k)
+    values = _numbers(jac)
+    number = ~np.isnan(values)
+    for r, c, value in zip(np.asarray(rows)[number].tolist(),
+                           np.asarray(cols)[number].tolist(), values[number].tolist()):
+        const[r].add(c)
+        if value:
+            linear[r][c] = exact(value)
+    symbolic = np.flatnonzero(~number).tolist()
     atoms: list = []
     if parameters and symbolic:
-        for k, a in _parameter_coefficients([nonzeros[k] for k in symbolic],
+        for k, a in _parameter_coefficients(ca.vertsplit(jac.nz[symbolic]),
                                             parameters, atoms):
             k = symbolic[k]
             const[rows[k]].add(cols[k])
@@ -243,6 +241,26 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         out.adj[e] = out.reduced[e][2]
     _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out,
                         linear, roles or {}, classes or {}, n)
+    return out
+
+
+def _numbers(jac: ca.SX) -> np.ndarray:
+    """The nonzeros of `jac` that are numbers, NaN for the others (expressions of
+    symbols): read in bulk, with one dependency pattern and one evaluation."""
+    nz = jac.nz[:]
+    out = np.full(nz.numel(), np.nan)
+    free = ca.symvar(nz)
+    depends = np.zeros(nz.numel(), dtype=bool)
+    if free:
+        depends[ca.jacobian_sparsity(nz, ca.vertcat(*free)).get_triplet()[0]] = True
+    fixed = np.flatnonzero(~depends)
+    if fixed.size:
+        try:
+            out[fixed] = np.asarray(ca.evalf(nz[fixed.tolist()]), dtype=float).ravel()
+        except RuntimeError:     # a symbol the pattern missed: ask entry by entry
+            for k in fixed.tolist():
+                z = nz[k]
+                out[k] = float(z) if z.is_constant() else np.nan
     return out
 
 
