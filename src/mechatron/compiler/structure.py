@@ -295,7 +295,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     n_given = var_vec.numel() if res else 0
     if res and reduction.jacobian is not None and all(
             e < n_orig and e not in reduced and v < n_given for e, v in singles):
-        given = (res_vec, var_vec, reduction.jacobian)
+        given = (res_vec, var_vec, reduction.jacobian, pattern)
     bulk = _solve_singles(res, var_syms, singles, given)
     for block in blocks:
         eqs, vs = block.equations, block.variables
@@ -488,7 +488,7 @@ def _is_symbol(expr: ca.SX, name: str) -> bool:
 
 def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
                    singles: list[tuple[int, int]],
-                   given: tuple[ca.SX, ca.SX, ca.SX] | None = None) -> dict[int, ca.SX]:
+                   given: tuple | None = None) -> dict[int, ca.SX]:
     """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
     them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
     where ``J = de/dx`` is free of ``x`` and not 0.
@@ -500,17 +500,18 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     takes one substitution. Returns ``{e: expression of x}``; the others (not linear
     in their variable) are left to the equation-by-equation path.
 
-    ``given = (R, V, J)``: the residuals and variables stacked, and the Jacobian of R in
-    V; each block's equation is then a row of R, its variable a row of V, and ``J`` is
-    read instead of differentiated again."""
+    ``given = (R, V, J, S)``: the residuals and variables stacked, the Jacobian of R in
+    V and its sparsity; each block's equation is then a row of R, its variable a row of
+    V, and ``J`` and ``S`` are read instead of computed again."""
     n = len(singles)
     if n < 2:
         return {}
     es = [e for e, _ in singles]
     vs = [v for _, v in singles]
     if given is not None:
-        R, V, J = given
+        R, V, J, S = given
         E, X = R[es], V[vs]
+        pattern = S.sub(es, vs, False)[0]
         # J's nonzeros in column-major order: their keys col * rows + row are sorted
         r_nz, c_nz = (np.asarray(a, dtype=np.int64) for a in J.sparsity().get_triplet())
         keys = c_nz * J.size1() + r_nz
@@ -524,9 +525,10 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         E = ca.vertcat(*[res[e] for e in es])
         X = ca.vertcat(*[var_syms[v] for v in vs])
         d = ca.diag(sparse_jacobian(E, X))
+        pattern = ca.jacobian_sparsity(E, X)
     # blocks i and j clash when the equation of one holds the variable of the other; in
     # the greedy colouring (in block order) only the earlier of the two looks at it
-    r, c = (np.asarray(a, dtype=np.int64) for a in ca.jacobian_sparsity(E, X).get_triplet())
+    r, c = (np.asarray(a, dtype=np.int64) for a in pattern.get_triplet())
     a, b = np.concatenate([r, c]), np.concatenate([c, r])
     keep = b < a
     a, b = a[keep], b[keep]
