@@ -156,7 +156,8 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         if len(members) == 1:
             best_name, best_f = members[0]
             result.unknowns.append(best_name)
-            _merge_starts(result, flat, best_name, [(best_name, 1.0)])
+            if unknowns[best_name].start is not None:
+                _merge_starts(result, flat, best_name, [(best_name, 1.0)])
             continue
         best_name, best_f = max(members, key=lambda m: _rank(unknowns[m[0]], m[0] in
                                                              derivative))
