@@ -45,10 +45,35 @@ class Lowered:
     n_unknowns: int = 0
 
 
+_SAMPLED_PATTERN_ROWS = 250_000   # from this many equations on, see _pattern
+
+
+def _pattern(expr: ca.SX, syms: ca.SX) -> ca.Sparsity:
+    """``jacobian_sparsity(expr, syms)``, with the rows that hold hundreds of variables
+    found first and swept apart from the others when there are many rows.
+
+    CasADi's sweep over a few hundred thousand rows slows down several-fold when one
+    row (the flow balance of a reference node that every branch of a ladder meets)
+    holds most columns. Such rows are found on every 64th column (a row with 8 of
+    them there holds hundreds of variables); the pattern is the same either way."""
+    if expr.numel() < _SAMPLED_PATTERN_ROWS:
+        return ca.jacobian_sparsity(expr, syms)
+    probe = ca.jacobian_sparsity(expr, syms[::64])
+    count = np.diff(np.asarray(probe.get_crs()[0], dtype=np.int64))
+    dense = np.flatnonzero(count >= 8)
+    if dense.size == 0:
+        return ca.jacobian_sparsity(expr, syms)
+    sparse = np.flatnonzero(count < 8)
+    both = ca.vertcat(ca.jacobian_sparsity(expr[sparse.tolist()], syms),
+                      ca.jacobian_sparsity(expr[dense.tolist()], syms))
+    order = np.argsort(np.concatenate([sparse, dense])).tolist()
+    return both.sub(order, list(range(both.size2())), False)[0]
+
+
 def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity]:
     """The incidence of ``expr`` in ``syms`` as rows of column indices, and the sparsity
     of the Jacobian it comes from."""
-    sp = ca.jacobian_sparsity(expr, syms)
+    sp = _pattern(expr, syms)
     ptr, col = sp.get_crs()
     return [col[ptr[r]:ptr[r + 1]] for r in range(sp.size1())], sp
 
