@@ -22,12 +22,23 @@ The SciPy baseline integrates the RC ladder written by hand as a tridiagonal lin
 ``C v' = (tridiagonal Laplacian) v / R + source`` with ``solve_ivp(method="BDF")`` and the
 constant sparse Jacobian, same tolerances and output points.
 
-``--quick`` skips N = 10000. Run: ``python bench/bench_scaling.py [--quick]``.
+Compile alone (``compile_scaling``): the RC ladder compiled once per N in a fresh
+process each (N = 1000, and 10000 without ``--quick``; ``--large`` adds N = 100000, a
+few minutes and about 4 GB), with the process CPU time of ``compile_model`` and of its
+passes (``report["cpu_timings"]``; ``report["timings"]`` in wall clock), the peak
+resident memory of the process (building the instance included) and the CPU
+microseconds per flat equation.
+
+``--quick`` skips N = 10000. Run: ``python bench/bench_scaling.py [--quick] [--large]``.
 """
 
 from __future__ import annotations
 
 import gc
+import json
+import resource
+import subprocess
+import sys
 import time
 
 import _common  # noqa: F401  (import path)
@@ -48,6 +59,8 @@ RTOL, ATOL = 1e-6, 1e-8
 N_OUT = 1001
 N_OUT_LARGE = 101      # output points when N = 10000 (see _grid)
 GOALS = {1000: 2.0, 10000: 20.0}   # compile-time goals of the project, s
+COMPILE_CPU_GOALS = {1000: 0.5, 10000: 5.0, 100000: 60.0}   # issue 17, CPU s
+LARGE = 100000
 
 # RC ladder and chain parameters
 R_SERIES, C_SHUNT, V_SOURCE = 1.0, 1e-3, 1.0
@@ -181,6 +194,52 @@ def measure(kind: str, n: int, *, simulate_twice: bool = True, compiles: int = 1
     return row, final, grid
 
 
+def compile_once(n: int) -> dict:
+    """Build and compile the RC ladder of ``n`` sections once, in this process: CPU and
+    wall time of ``compile_model``, its passes, and the process's peak resident memory.
+    A ladder of 2 sections is compiled first: the modules the compiler imports on first
+    use are then loaded, and not counted."""
+    mt.compile_model(rc_ladder(2))
+    gc.collect()
+    model, t_build = clock(rc_ladder, n)
+    cpu = time.process_time()
+    cm, t_compile = clock(mt.compile_model, model)
+    cpu = time.process_time() - cpu
+    rep = cm.report
+    flat = (rep.get("equations") or {}).get("flat") or 0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {"N": n, "build_s": t_build, "compile_s": t_compile, "compile_cpu_s": cpu,
+            "passes_s": dict(rep.get("timings", {})),
+            "passes_cpu_s": dict(rep.get("cpu_timings", {})), "equations_flat": flat,
+            "states": len(cm.state_names),
+            "us_per_equation": 1e6 * cpu / flat if flat else None,
+            "peak_rss_MB": peak / 1024 if sys.platform != "darwin" else peak / 2**20}
+
+
+def compile_scaling(sizes: list[int], fresh: bool = True) -> dict:
+    """``compile_once`` per N, each in a new process when ``fresh`` (so the peak memory
+    is that N's), with the growth of the time per equation between sizes."""
+    rows = []
+    for n in sizes:
+        if fresh:
+            done = subprocess.run([sys.executable, __file__, "--compile-one", str(n)],
+                                  capture_output=True, text=True, check=True)
+            row = json.loads(done.stdout.strip().splitlines()[-1])
+        else:
+            row = compile_once(n)
+        log(f"rc_ladder N={n} compile alone: cpu {row['compile_cpu_s']:.3f} s, "
+            f"{row['us_per_equation']:.1f} us/equation, peak {row['peak_rss_MB']:.0f} MB")
+        rows.append(row)
+    first = rows[0]["us_per_equation"] if rows else None
+    for row in rows:
+        row["us_per_equation_over_smallest"] = ratio(row["us_per_equation"], first)
+        goal = COMPILE_CPU_GOALS.get(row["N"])
+        row["goal_cpu_s"] = goal
+        row["met"] = row["compile_cpu_s"] < goal if goal else None
+    return {"rows": rows, "fresh_process": fresh,
+            "growth_exponents": _exponents(rows, lambda r: r["compile_cpu_s"])}
+
+
 def _exponents(rows: list[dict], key, same_grid: bool = False) -> list[dict]:
     """Growth exponents between successive rows; with ``same_grid``, only between rows
     that logged the same number of output points (None otherwise)."""
@@ -194,9 +253,10 @@ def _exponents(rows: list[dict], key, same_grid: bool = False) -> list[dict]:
     return out
 
 
-def run(quick: bool = False, tiny: bool = False) -> dict:
+def run(quick: bool = False, tiny: bool = False, large: bool = False) -> dict:
     """Compile-time and simulation scaling (RC ladder, mass-spring chain) and SciPy baseline."""
     sizes = [5, 10] if tiny else [n for n in SIZES if not (quick and n >= 10000)]
+    alone = [10] if tiny else [1000] + ([] if quick else [10000]) + ([LARGE] if large else [])
     out = {"benchmark": "scaling",
            "settings": {"sizes": sizes, "t_stop_s": T_STOP, "rtol": RTOL, "atol": ATOL,
                         "solver": "cvodes", "output_points": N_OUT,
@@ -252,6 +312,7 @@ def run(quick: bool = False, tiny: bool = False) -> dict:
                     rows, lambda r: r["simulate_profile_s"]["solver_call_s"]),
             },
         }
+    out["compile_scaling"] = compile_scaling(alone, fresh=not tiny)
     out["notes"] = [
         "Timings are wall clock on a shared machine (see environment.load_average); "
         "compile_cpu_s is the process CPU time of the same compile, less sensitive to "
@@ -269,9 +330,24 @@ def run(quick: bool = False, tiny: bool = False) -> dict:
         "into a NumPy array (no casadi.DM round trip), for comparison.",
         "rc_ladder ratio: SciPy time / Mechatron simulate time (second call when there is "
         "one); > 1 means Mechatron is faster.",
+        "compile_scaling: the RC ladder compiled once per N, each in a fresh process; "
+        "compile_cpu_s is the process CPU time of compile_model, passes_cpu_s "
+        "its passes (passes_s: wall clock), peak_rss_MB the process's peak (instance built included); the goals are "
+        "issue 17's, on CPU time. N = 100000 only with --large.",
     ]
     return out
 
 
+def run_large(quick: bool = False) -> dict:
+    """Compile-time and simulation scaling, and the RC ladder compiled at N = 100000."""
+    return run(quick=quick, large=True)
+
+
 if __name__ == "__main__":
-    main(run)
+    if "--compile-one" in sys.argv:      # one size in this process (compile_scaling)
+        print(json.dumps(compile_once(int(sys.argv[sys.argv.index("--compile-one") + 1]))))
+    elif "--large" in sys.argv:
+        sys.argv.remove("--large")
+        main(run_large)
+    else:
+        main(run)

@@ -204,6 +204,14 @@ def _rows_scaling(r: dict) -> list[dict]:
                          f"ratio >= {LADDER_SIMULATE_GOAL_RATIO:g} (issue 17)" if wants
                          else None,
                          (ratio or 0) >= LADDER_SIMULATE_GOAL_RATIO if wants else None))
+    for row in r.get("compile_scaling", {}).get("rows", []):
+        n, cpu = row["N"], row["compile_cpu_s"]
+        goal = LADDER_COMPILE_GOAL_S.get(n)
+        rows.append(_row(f"RC ladder N={n} compile alone, CPU "
+                         f"({row['us_per_equation'] or 0:.0f} us/equation, "
+                         f"peak {row['peak_rss_MB']:.0f} MB)", "s", cpu,
+                         goal=f"< {goal} s CPU (issue 17)" if goal else None,
+                         met=cpu < goal if goal else None))
     return rows
 
 

@@ -44,15 +44,20 @@ def _signed_symbol(expr: ca.SX, unknowns) -> tuple[str, float] | None:
 
 def eliminate_aliases(flat: FlatModel) -> AliasResult:
     """Find alias classes, pick representatives, substitute in bulk."""
-    unknowns = {n: v for n, v in flat.variables.items()}
-    parent: dict[str, str] = {}
+    unknowns = flat.variables      # read only
+    parent: dict[str, str] = {}    # never a name to itself: a root has no entry
     factor: dict[str, float] = {}  # name = factor * parent
     const: dict[str, float] = {}   # root -> constant value (root = const)
 
     def find(a: str) -> tuple[str, float]:
         """Root of ``a`` and the factor with a = factor * root (path compressed)."""
+        up = parent.get(a)
+        if up is None:
+            return a, 1.0
+        if up not in parent:           # a child of its root: nothing to compress
+            return up, factor[a]
         path = []
-        while parent.get(a, a) != a:
+        while a in parent:
             path.append(a)
             a = parent[a]
         acc = 1.0
@@ -151,7 +156,8 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         if len(members) == 1:
             best_name, best_f = members[0]
             result.unknowns.append(best_name)
-            _merge_starts(result, flat, best_name, [(best_name, 1.0)])
+            if unknowns[best_name].start is not None:
+                _merge_starts(result, flat, best_name, [(best_name, 1.0)])
             continue
         best_name, best_f = max(members, key=lambda m: _rank(unknowns[m[0]], m[0] in
                                                              derivative))

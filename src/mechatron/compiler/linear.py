@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 import casadi as ca
+import numpy as np
 
 from mechatron.compiler.graph import maximum_matching
 from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
@@ -37,7 +38,29 @@ from mechatron.compiler.graph.matching import augment_from
 from mechatron.compiler.graph.polynomial import Laurent, atom
 from mechatron.errors import StructuralError
 
-__all__ = ["Reduction", "Combined", "reveal", "owner_of"]
+__all__ = ["Reduction", "Combined", "reveal", "owner_of", "sparse_jacobian"]
+
+_DENSE_ROW = 64   # rows with more variables are differentiated apart (sparse_jacobian)
+
+
+def sparse_jacobian(expr: ca.SX, syms: ca.SX, sparsity: ca.Sparsity | None = None) -> ca.SX:
+    """``casadi.jacobian(expr, syms)``, with the rows that hold more than `_DENSE_ROW`
+    variables differentiated apart from the others.
+
+    One dense row (the flow balance of a reference node that every branch of a ladder
+    meets) makes every column of the Jacobian clash with every other in CasADi's graph
+    colouring: the whole Jacobian then costs time quadratic in its size, its two parts
+    linear. `sparsity` is ``jacobian_sparsity(expr, syms)`` if the caller has it."""
+    if sparsity is None:
+        sparsity = ca.jacobian_sparsity(expr, syms)
+    count = np.diff(np.asarray(sparsity.get_crs()[0], dtype=np.int64))
+    dense = np.flatnonzero(count > _DENSE_ROW)
+    if dense.size == 0 or dense.size == count.size:
+        return ca.jacobian(expr, syms)
+    sparse = np.flatnonzero(count <= _DENSE_ROW)
+    both = ca.vertcat(ca.jacobian(expr[sparse.tolist()], syms),
+                      ca.jacobian(expr[dense.tolist()], syms))
+    return both[np.argsort(np.concatenate([sparse, dense])).tolist(), :]
 
 
 @dataclass
@@ -64,6 +87,8 @@ class Reduction:
     atoms : list of SX
         The parameter (or parameter expression) that each atom of a `Laurent`
         coefficient stands for.
+    jacobian : SX or None
+        The Jacobian of the given equations in the variables (None without equations).
     """
 
     adj: list[list[int]]
@@ -71,6 +96,7 @@ class Reduction:
     changed: list[int] = field(default_factory=list)
     const: list[set[int]] = field(default_factory=list)
     atoms: list = field(default_factory=list)
+    jacobian: ca.SX | None = None
 
     def expression(self, a) -> ca.SX:
         """Coefficient `a` (a number or a `Laurent` polynomial) as an expression."""
@@ -130,7 +156,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
            roles: dict[str, tuple[str, str, str, bool]] | None = None,
            classes: dict[str, str] | None = None,
            parameters: list[ca.SX] | None = None,
-           stacked: tuple[ca.SX, ca.SX] | None = None) -> Reduction:
+           stacked: tuple[ca.SX, ca.SX] | None = None,
+           sparsity: ca.Sparsity | None = None) -> Reduction:
     """Reduce the linear part of the equations exactly; raise on a dependency.
 
     An unknown's coefficient takes part when it is a number or an expression of
@@ -155,6 +182,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         symbolic coefficients; default: only numeric coefficients are.
     stacked : (SX, SX), optional
         ``vertcat(*res)`` and ``vertcat(*var_syms)``, if the caller has them already.
+    sparsity : Sparsity, optional
+        Their Jacobian's sparsity, if the caller has it.
 
     Raises
     ------
@@ -165,24 +194,22 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     n = len(var_syms)
     if not res:
         return Reduction([list(r) for r in adj])
-    jac = ca.jacobian(*(stacked if stacked is not None else
-                        (ca.vertcat(*res), ca.vertcat(*var_syms))))
+    jac = sparse_jacobian(*(stacked if stacked is not None else
+                            (ca.vertcat(*res), ca.vertcat(*var_syms))), sparsity)
     rows, cols = jac.sparsity().get_triplet()
     const: list[set[int]] = [set() for _ in res]
     linear: list[dict] = [{} for _ in res]
-    nonzeros = jac.nonzeros()
-    symbolic = []
-    for k, z in enumerate(nonzeros):
-        if z.is_constant():
-            const[rows[k]].add(cols[k])
-            value = float(z)
-            if value:
-                linear[rows[k]][cols[k]] = exact(value)
-        else:
-            symbolic.append(k)
+    values = _numbers(jac)
+    number = ~np.isnan(values)
+    for r, c, value in zip(np.asarray(rows)[number].tolist(),
+                           np.asarray(cols)[number].tolist(), values[number].tolist()):
+        const[r].add(c)
+        if value:
+            linear[r][c] = exact(value)
+    symbolic = np.flatnonzero(~number).tolist()
     atoms: list = []
     if parameters and symbolic:
-        for k, a in _parameter_coefficients([nonzeros[k] for k in symbolic],
+        for k, a in _parameter_coefficients(ca.vertsplit(jac.nz[symbolic]),
                                             parameters, atoms):
             k = symbolic[k]
             const[rows[k]].add(cols[k])
@@ -202,7 +229,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     pure = [e for e in range(len(res))
             if not any(eliminable[v] for v in other_terms(e))]
     elim = exact_elimination(linear, eliminable, rows=pure)
-    out = Reduction([list(r) for r in adj], const=const, atoms=atoms)
+    out = Reduction([list(r) for r in adj], const=const, atoms=atoms, jacobian=jac)
     for e, row in elim.rows.items():
         comb = elim.combination(e) if elim.changed(e) else {e: 1}
         inc = dict.fromkeys(sorted(row))
@@ -214,6 +241,26 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         out.adj[e] = out.reduced[e][2]
     _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out,
                         linear, roles or {}, classes or {}, n)
+    return out
+
+
+def _numbers(jac: ca.SX) -> np.ndarray:
+    """The nonzeros of `jac` that are numbers, NaN for the others (expressions of
+    symbols): read in bulk, with one dependency pattern and one evaluation."""
+    nz = jac.nz[:]
+    out = np.full(nz.numel(), np.nan)
+    free = ca.symvar(nz)
+    depends = np.zeros(nz.numel(), dtype=bool)
+    if free:
+        depends[ca.jacobian_sparsity(nz, ca.vertcat(*free)).get_triplet()[0]] = True
+    fixed = np.flatnonzero(~depends)
+    if fixed.size:
+        try:
+            out[fixed] = np.asarray(ca.evalf(nz[fixed.tolist()]), dtype=float).ravel()
+        except RuntimeError:     # a symbol the pattern missed: ask entry by entry
+            for k in fixed.tolist():
+                z = nz[k]
+                out[k] = float(z) if z.is_constant() else np.nan
     return out
 
 

@@ -13,8 +13,14 @@ rebuilds them with ``SX.unary``/``SX.binary``, so no Python source is parsed.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import repeat
 
 import casadi as ca
+
+try:      # CasADi's own entry point, without the Python wrapper: once per instruction
+    from casadi._casadi import Function_instruction_id as _OP_OF
+except ImportError:     # pragma: no cover - other CasADi builds
+    _OP_OF = ca.Function.instruction_id
 
 __all__ = ["Relation", "extract_relations"]
 
@@ -56,8 +62,8 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
                                                              ca.vertcat(*residuals))
     f = ca.Function("scan", [sym_vec], [res_vec])
     n = f.n_instructions()
-    ops = [f.instruction_id(k) for k in range(n)]
-    if not any(op in _REL_OPS for op in ops):
+    ops = list(map(_OP_OF, repeat(f, n), range(n)))
+    if _REL_OPS.keys().isdisjoint(ops):
         return residuals, []
     # which outputs depend on a relation: propagate a flag through the work vector
     flagged_work: dict[int, bool] = {}

@@ -18,7 +18,7 @@ import numpy as np
 
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
-from mechatron.compiler.linear import Combined, owner_of, reveal
+from mechatron.compiler.linear import Combined, owner_of, reveal, sparse_jacobian
 from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
 
@@ -45,10 +45,37 @@ class Lowered:
     n_unknowns: int = 0
 
 
-def _csr(expr: ca.SX, syms: ca.SX) -> list[list[int]]:
-    sp = ca.jacobian_sparsity(expr, syms)
+_SAMPLED_PATTERN_ROWS = 250_000   # from this many equations on, see _pattern
+
+
+def _pattern(expr: ca.SX, syms: ca.SX) -> ca.Sparsity:
+    """``jacobian_sparsity(expr, syms)``, with the rows that hold hundreds of variables
+    found first and swept apart from the others when there are many rows.
+
+    CasADi's sweep over a few hundred thousand rows slows down several-fold when one
+    row (the flow balance of a reference node that every branch of a ladder meets)
+    holds most columns. Such rows are found on every 64th column (a row with 8 of
+    them there holds hundreds of variables); the pattern is the same either way."""
+    if expr.numel() < _SAMPLED_PATTERN_ROWS:
+        return ca.jacobian_sparsity(expr, syms)
+    probe = ca.jacobian_sparsity(expr, syms[::64])
+    count = np.diff(np.asarray(probe.get_crs()[0], dtype=np.int64))
+    dense = np.flatnonzero(count >= 8)
+    if dense.size == 0:
+        return ca.jacobian_sparsity(expr, syms)
+    sparse = np.flatnonzero(count < 8)
+    both = ca.vertcat(ca.jacobian_sparsity(expr[sparse.tolist()], syms),
+                      ca.jacobian_sparsity(expr[dense.tolist()], syms))
+    order = np.argsort(np.concatenate([sparse, dense])).tolist()
+    return both.sub(order, list(range(both.size2())), False)[0]
+
+
+def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity]:
+    """The incidence of ``expr`` in ``syms`` as rows of column indices, and the sparsity
+    of the Jacobian it comes from."""
+    sp = _pattern(expr, syms)
     ptr, col = sp.get_crs()
-    return [list(col[ptr[r]:ptr[r + 1]]) for r in range(sp.size1())]
+    return [col[ptr[r]:ptr[r + 1]] for r in range(sp.size1())], sp
 
 
 class _Singular(StructuralError):
@@ -157,7 +184,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     if res:
         res_vec, var_vec = stacked if stacked is not None else (ca.vertcat(*res),
                                                                 ca.vertcat(*var_syms))
-    adj = _csr(res_vec, var_vec) if res else []
+    adj, pattern = _csr(res_vec, var_vec) if res else ([], None)
     # derivative symbols that appear nowhere do not make their variable a state
     used = set(v for row in adj for v in row)
     for i, d in enumerate(var_to_diff):
@@ -169,7 +196,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # constraints hidden in the linear network equations (a cut set of current sources
     # and inductors, a loop of voltage sources and capacitors) are exposed first
     reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
-                       classes, parameters, stacked=(res_vec, var_vec) if res else None)
+                       classes, parameters, stacked=(res_vec, var_vec) if res else None,
+                       sparsity=pattern)
     try:
         ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
     except StructuralError as exc:
@@ -190,7 +218,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         base = ir.var_to_diff.index(v)
         var_syms.append(ca.SX.sym(f"der({var_names[base]})"))
         var_names.append(f"der({var_names[base]})")
-    sym_index = {s.name(): i for i, s in enumerate(var_syms)}
+    sym_index = ({s.name(): i for i, s in enumerate(var_syms)}
+                 if len(ir.adj) > len(res) else {})
     for e in range(len(res), len(ir.adj)):
         src = ir.eq_to_diff.index(e)
         res.append(_time_derivative(res[src], var_syms, sym_index, ir.var_to_diff, time))
@@ -269,7 +298,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                   differentiated=differentiated, n_blocks=len(blocks),
                   n_equations=len(res), n_unknowns=sum(allowed))
     coef_cache: dict[tuple[int, int], ca.SX | None] = {}
-    unknown_names = {x.name() for x in var_syms}
+    unknown_names = _OnFirstUse(lambda: {x.name() for x in var_syms})   # loops only
 
     def coefficient(e: int, v: int):
         """d res[e] / d v when res[e] is linear in v with a nonzero coefficient, else None."""
@@ -284,8 +313,15 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     def solvable(e: int, v: int) -> bool:
         return coefficient(e, v) is not None
 
-    bulk = _solve_singles(res, var_syms, [(b.equations[0], b.variables[0]) for b in blocks
-                                          if len(b.equations) == 1])
+    # the given equations and their Jacobian (from `reveal`) serve the one-equation
+    # blocks, unless index reduction replaced or added equations among them
+    singles = [(b.equations[0], b.variables[0]) for b in blocks if len(b.equations) == 1]
+    given = None
+    n_given = var_vec.numel() if res else 0
+    if res and reduction.jacobian is not None and all(
+            e < n_orig and e not in reduced and v < n_given for e, v in singles):
+        given = (res_vec, var_vec, reduction.jacobian, pattern)
+    bulk = _solve_singles(res, var_syms, singles, given)
     for block in blocks:
         eqs, vs = block.equations, block.variables
         out.largest_block = max(out.largest_block, len(eqs))
@@ -476,7 +512,8 @@ def _is_symbol(expr: ca.SX, name: str) -> bool:
 
 
 def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
-                   singles: list[tuple[int, int]]) -> dict[int, ca.SX]:
+                   singles: list[tuple[int, int]],
+                   given: tuple | None = None) -> dict[int, ca.SX]:
     """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
     them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
     where ``J = de/dx`` is free of ``x`` and not 0.
@@ -486,35 +523,60 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     coloured so that no equation holds the variable of another block of its colour
     (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
     takes one substitution. Returns ``{e: expression of x}``; the others (not linear
-    in their variable) are left to the equation-by-equation path."""
+    in their variable) are left to the equation-by-equation path.
+
+    ``given = (R, V, J, S)``: the residuals and variables stacked, the Jacobian of R in
+    V and its sparsity; each block's equation is then a row of R, its variable a row of
+    V, and ``J`` and ``S`` are read instead of computed again."""
     n = len(singles)
     if n < 2:
         return {}
-    E = ca.vertcat(*[res[e] for e, _ in singles])
-    X = ca.vertcat(*[var_syms[v] for _, v in singles])
-    rows, cols = ca.jacobian_sparsity(E, X).get_triplet()
-    holds: list[list[int]] = [[] for _ in range(n)]     # other blocks' variables in i
-    held: list[list[int]] = [[] for _ in range(n)]      # blocks whose equation holds x_i
-    for r, c in zip(rows, cols):
-        if r != c:
-            holds[r].append(c)
-            held[c].append(r)
-    d = ca.diag(ca.jacobian(E, X))
-    bad = set(ca.jacobian_sparsity(d, X).get_triplet()[0])   # J depends on the variable
-    dz = ca.vertsplit(d)
+    es = [e for e, _ in singles]
+    vs = [v for _, v in singles]
+    if given is not None:
+        R, V, J, S = given
+        E, X = R[es], V[vs]
+        pattern = S.sub(es, vs, False)[0]
+        # J's nonzeros in column-major order: their keys col * rows + row are sorted
+        r_nz, c_nz = (np.asarray(a, dtype=np.int64) for a in J.sparsity().get_triplet())
+        keys = c_nz * J.size1() + r_nz
+        want = np.asarray(vs, dtype=np.int64) * J.size1() + np.asarray(es, dtype=np.int64)
+        at = np.minimum(np.searchsorted(keys, want), max(keys.size - 1, 0))
+        hit = np.flatnonzero(keys[at] == want) if keys.size else np.zeros(0, np.int64)
+        d = ca.SX.zeros(n)
+        if hit.size:
+            d[hit.tolist()] = J.nz[at[hit].tolist()]
+    else:
+        E = ca.vertcat(*[res[e] for e in es])
+        X = ca.vertcat(*[var_syms[v] for v in vs])
+        d = ca.diag(sparse_jacobian(E, X))
+        pattern = ca.jacobian_sparsity(E, X)
+    # blocks i and j clash when the equation of one holds the variable of the other; in
+    # the greedy colouring (in block order) only the earlier of the two looks at it
+    r, c = (np.asarray(a, dtype=np.int64) for a in pattern.get_triplet())
+    a, b = np.concatenate([r, c]), np.concatenate([c, r])
+    keep = b < a
+    a, b = a[keep], b[keep]
+    order = np.argsort(a, kind="stable")
+    ptr = np.searchsorted(a[order], np.arange(n + 1)).tolist()
+    earlier = b[order].tolist()
+    # a block is left out when its coefficient J is 0 or depends on a variable
+    usable = np.zeros(n, dtype=bool)
+    usable[ca.sparsify(d).sparsity().get_triplet()[0]] = True
+    usable[ca.jacobian_sparsity(d, X).get_triplet()[0]] = False
     colour = [-1] * n
     classes: list[list[int]] = []
-    for i in range(n):
-        if i in bad or dz[i].is_zero():
-            continue
-        taken = {colour[k] for k in holds[i]} | {colour[k] for k in held[i]}
-        c = 0
-        while c in taken:
-            c += 1
-        colour[i] = c
-        if c == len(classes):
+    for i in np.flatnonzero(usable).tolist():
+        lo, hi = ptr[i], ptr[i + 1]
+        k = 0
+        if lo < hi:
+            taken = {colour[j] for j in earlier[lo:hi]}
+            while k in taken:
+                k += 1
+        colour[i] = k
+        if k == len(classes):
             classes.append([])
-        classes[c].append(i)
+        classes[k].append(i)
     out: dict[int, ca.SX] = {}
     for idx in classes:
         # slices of the stacked vectors (indexing by a list of ints stays in C++; a
@@ -552,8 +614,20 @@ def _solve_linear(r: ca.SX, x: ca.SX, coef: ca.SX) -> ca.SX:
     return -rest / coef
 
 
+class _OnFirstUse:
+    """A set built on its first membership test."""
+
+    def __init__(self, build):
+        self._build, self._set = build, None
+
+    def __contains__(self, item) -> bool:
+        if self._set is None:
+            self._set = self._build()
+        return item in self._set
+
+
 def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, coefficient,
-                 unknown_names: set[str]) -> None:
+                 unknown_names) -> None:
     # the sequence divides by its coefficients: only those free of unknowns are safe (a
     # coefficient such as sin(q) of a rigid link vanishes in some configurations and
     # would turn a nonsingular loop into 0/0); the loop's linear part is then solved by
