@@ -53,7 +53,8 @@ def _external_blocks(model: Component) -> list[dict]:
         describe = getattr(el, "external_block", None)
         if describe is not None:
             out.append(describe())
-        stack.extend(reversed(list(el.components.values())))
+        stack.extend(reversed([c for c in el._children.values()
+                               if isinstance(c, Component)]))
     return out
 
 
@@ -76,6 +77,16 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         names.append(name)
         units.append(unit)
         docs.append(doc)
+        if len(terms) == 1:         # an across variable, or a flow through one member
+            rep, k = eliminated.get(terms[0][0], (terms[0][0], 1.0))
+            if rep is None:
+                constant.append(terms[0][1] * k)
+            else:
+                rows.append(r)
+                cols.append(index[rep])
+                vals.append(terms[0][1] * k)
+                constant.append(0.0)
+            return
         offset = 0.0
         entries: dict[int, float] = {}      # terms of one representative add up
         for n, c in terms:
