@@ -18,7 +18,7 @@ from mechatron.core.component import Component, Connect, Connector, Element, Sig
 from mechatron.core.connections import (connection_sets, inside_connected, is_driver,
                                         port_key)
 from mechatron.core.context import BuildContext
-from mechatron.core.declarations import (Across, Input, Output, Parameter,
+from mechatron.core.declarations import (Across, Discrete, Input, Output, Parameter,
                                          ParameterExpression, Start, Through, Variable)
 from mechatron.core.domains import SIGNAL
 from mechatron.core.events import EventAction
@@ -72,8 +72,8 @@ class FlatVariable:
 
 class FoldedPort:
     """A folded subsystem port: its across variables equal those of the node's first
-    member ``node``; its through variables are the signed sums ``flow`` ``{member
-    path: coefficient}`` of the members' through variables."""
+    member ``node``; each through variable is the sum of those of the members ``flow``
+    (paths of the inside members of its set)."""
 
     __slots__ = ("path", "cls", "node", "flow", "position", "order")
 
@@ -120,15 +120,15 @@ class FlatModel:
 
     def folded_variables(self):
         """``(name, unit, doc, position, terms)`` of each variable of a folded port: the
-        signed sum ``terms`` ``[(variable name, coefficient)]`` of the model's variables,
-        logged after the first ``position`` variables of the model."""
+        sum ``terms`` ``[(variable name, coefficient)]`` of the model's variables, logged
+        after the first ``position`` variables of the model."""
         for port in self.folded:
             plan = _declaration_plan(port.cls)[1]
             for key, kind, unit, doc, *_ in plan:
                 if kind == "across":
                     terms = [(f"{port.node}.{key}", 1.0)]
                 else:
-                    terms = [(f"{path}.{key}", c) for path, c in port.flow.items()]
+                    terms = [(f"{path}.{key}", 1.0) for path in port.flow]
                 yield f"{port.path}.{key}", unit, doc, port.position, terms
 
     @property
@@ -472,20 +472,16 @@ def _binding_check(expr, parent_cls, unit: str) -> tuple:
 
 def _plain_reference(expr):
     """The parent parameter's name if ``expr`` is that parameter itself (``R=R``), else
-    None; read once per expression from what it evaluates to."""
-    got = _TEXTS.get(("plain", id(expr)))
-    if got is None:
-        names = expr.names
-        name = None
-        if len(names) == 1:
-            marker = object()
-            try:
-                if expr.evaluate(lambda n: marker) is marker:
-                    name = names[0]
-            except TypeError:       # arithmetic on the marker: an expression
-                pass
-        got = _TEXTS[("plain", id(expr))] = (expr, name)
-    return got[1]
+    None, read from what it evaluates to (cached by `_binding_check`)."""
+    names = expr.names
+    if len(names) == 1:
+        marker = object()
+        try:
+            if expr.evaluate(lambda n: marker) is marker:
+                return names[0]
+        except TypeError:           # arithmetic on the marker: an expression
+            pass
+    return None
 
 
 def _expression_text(expr) -> str:
@@ -1051,9 +1047,8 @@ class _Joined:
 def _folded_variables(flat: FlatModel, folded, folding) -> None:
     """Record the folded ports, for logging their variables (`FlatModel.folded`)."""
     node, flow = folding.node, folding.flow
-    flat.folded = [FoldedPort(port.path, type(port), node[pid].path,
-                              dict.fromkeys(flow[pid], 1.0), port._syms.position,
-                              port._syms.order)
+    flat.folded = [FoldedPort(port.path, type(port), node[pid].path, flow[pid],
+                              port._syms.position, port._syms.order)
                    for pid, port in folded.items()]
 
 
@@ -1204,11 +1199,10 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
 
 def _check_references(flat, model, elements, nodes, problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
-    the ports of each connection set (a subsystem's port is one node inside and outside)
-    and the ports of one domain on each component."""
+    the ports of each physical node ``nodes`` (lists of members; a subsystem's port is one
+    node inside and outside) and the ports of one domain on each component."""
     net = _UnionFind()
-    physical = nodes                # the members of each physical node
-    for members in physical:
+    for members in nodes:
         ids = [id(m.port) for m in members]
         for i in ids[1:]:
             net.union(ids[0], i)
@@ -1223,7 +1217,7 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
                     net.union(i, id(port))
     networks: dict[int, list[Connector]] = {}
     grounded: set[int] = set()
-    for members in physical:
+    for members in nodes:
         for m in members:
             port = m.port
             root = net.find(id(port))
@@ -1244,7 +1238,6 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
 @functools.lru_cache(maxsize=None)
 def _discrete_keys(cls) -> tuple:
     """``(key, declaration)`` of a class's ``Discrete`` declarations (once per class)."""
-    from mechatron.core.declarations import Discrete
     return tuple((k, d) for k, d in cls._declarations.items() if isinstance(d, Discrete))
 
 
@@ -1255,7 +1248,6 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     keeps its start value: ``der(v) == 0``); an action target that is not differentiated
     anywhere is a discrete Real (its ``der(v) == 0`` was added by ``_discrete_states``).
     """
-    from mechatron.core.declarations import Discrete
     ctx = flat.context
     for eq in flat.equations:
         if isinstance(eq.origin, str) and eq.origin.endswith("changed only by events)"):

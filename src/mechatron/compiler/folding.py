@@ -38,10 +38,6 @@ from mechatron.core.declarations import Input
 
 __all__ = ["ClassPlan", "plan_subsystems", "join_planned"]
 
-_PLAIN_KEYS = frozenset(("doc", "_name", "_parent", "_values", "_starts", "_syms",
-                         "_children", "_path_cache"))
-
-
 class ClassPlan:
     """The connection sets of a subsystem class, by path relative to an instance: for
     each set, the name of the class's own port in it (or None) and the other members as
@@ -59,6 +55,7 @@ def plan_subsystems(model: Component, elements) -> tuple[dict, dict]:
     """``(planned, folded)``: the instances wired by their class's plan, ``id -> (instance,
     plan)``, and their ports folded, ``id -> Connector`` in tree order. ``planned.inside``
     holds the ids of the components within planned instances."""
+    from mechatron.compiler.flatten import _PLAIN_KEYS
     plans: dict[type, ClassPlan | None] = {}
     planned = _Planned()
     inside = planned.inside
@@ -102,6 +99,7 @@ def _plan(el) -> ClassPlan | None:
     """The plan of ``el``'s class read from ``el`` (None if the class does not qualify).
     ``equations()`` is called before symbols are bound: reading a variable or parameter
     raises, which marks the class as not qualifying."""
+    from mechatron.compiler.flatten import _as_equations, _own_methods
     children = el._children
     ports = [n for n, c in children.items() if isinstance(c, Connector)]
     parts = [c for c in children.values() if isinstance(c, Component)]
@@ -109,16 +107,13 @@ def _plan(el) -> ClassPlan | None:
         return None
     connects = []
     has_equations = False
-    for klass in reversed(type(el).__mro__):
-        own = vars(klass).get("equations")
-        if own is None or klass is Component:
-            continue
+    for klass, own in _own_methods(type(el), "equations"):
         has_equations = has_equations or klass is type(el)
         try:
             items = own(el)
         except Exception:       # noqa: BLE001 - reads a symbol: not connections only
             return None
-        for item in _items(items):
+        for item in _as_equations(items):
             if not isinstance(item, Connect) or len(item.ports) < 2 or not all(
                     isinstance(p, Connector) for p in item.ports):
                 return None
@@ -151,16 +146,6 @@ def _plan(el) -> ClassPlan | None:
             return None                 # a port left open inside: reported as before
     own = {name: own[name] for name in ports if name in own}   # declaration order
     return ClassPlan(own, sets, has_equations)
-
-
-def _items(items):
-    stack = [items]
-    while stack:
-        item = stack.pop()
-        if isinstance(item, (list, tuple)):
-            stack.extend(reversed(item))
-        elif item is not None:
-            yield item
 
 
 class Joining:

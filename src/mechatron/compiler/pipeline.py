@@ -61,10 +61,11 @@ def _external_blocks(model: Component) -> list[dict]:
 def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     """Every logged variable: names, units, docs, and the column of their expressions in
     the unknowns, formed in bulk as one sparse matrix times the model's stacked variable
-    symbols plus constants (no CasADi call per variable). A variable is itself, a scaled
-    representative or a constant where alias elimination removed it, and a variable of
-    a folded subsystem port (:mod:`mechatron.compiler.folding`) the sum of its terms,
-    each read the same way; folded ones stand where their ports are declared."""
+    symbols plus constants (no CasADi call per variable). Each is a sum of model
+    variables read through alias elimination (a variable removed by it is a scaled
+    representative or a constant): a model variable the sum of itself, a variable of a
+    folded subsystem port (:mod:`mechatron.compiler.folding`) that of its terms, logged
+    where its port is declared."""
     variables = flat.variables
     index = {n: k for k, n in enumerate(variables)}
     eliminated = alias.eliminated
@@ -77,16 +78,6 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         names.append(name)
         units.append(unit)
         docs.append(doc)
-        if len(terms) == 1:         # an across variable, or a flow through one member
-            rep, k = eliminated.get(terms[0][0], (terms[0][0], 1.0))
-            if rep is None:
-                constant.append(terms[0][1] * k)
-            else:
-                rows.append(r)
-                cols.append(index[rep])
-                vals.append(terms[0][1] * k)
-                constant.append(0.0)
-            return
         offset = 0.0
         entries: dict[int, float] = {}      # terms of one representative add up
         for n, c in terms:
@@ -96,36 +87,18 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
             else:
                 j = index[rep]
                 entries[j] = entries.get(j, 0.0) + c * k
-        for j, v in entries.items():
-            rows.append(r)
-            cols.append(j)
-            vals.append(v)
+        rows.extend([r] * len(entries))
+        cols.extend(entries)
+        vals.extend(entries.values())
         constant.append(offset)
 
     folded = sorted(flat.folded_variables(), key=lambda f: f[3])
     k = 0
     for j, (n, var) in enumerate(variables.items()):
         while k < len(folded) and folded[k][3] <= j:
-            name, unit, doc, _, terms = folded[k]
-            add(name, unit, doc, terms)
+            add(*folded[k][:3], folded[k][4])
             k += 1
-        e = eliminated.get(n)
-        r = len(names)
-        names.append(n)
-        units.append(var.unit)
-        docs.append(var.doc)
-        if e is None:
-            rows.append(r)
-            cols.append(j)
-            vals.append(1.0)
-            constant.append(0.0)
-        elif e[0] is None:
-            constant.append(e[1])
-        else:
-            rows.append(r)
-            cols.append(index[e[0]])
-            vals.append(e[1])
-            constant.append(0.0)
+        add(n, var.unit, var.doc, ((n, 1.0),))
     for name, unit, doc, _, terms in folded[k:]:
         add(name, unit, doc, terms)
     if not names:
