@@ -24,7 +24,7 @@ from mechatron.solvers.inputs import driven_parameters
 from mechatron.solvers.logging import evaluate_point
 
 __all__ = ["integrate_variable", "consistent_algebraics", "held_states", "LINEAR_SOLVERS",
-           "linear_solver_for", "auto_linear_solver"]
+           "linear_solver_for", "auto_linear_solver", "linear_form", "LinearForm"]
 
 #: Newton iterations that polish the algebraic unknowns at the output times
 Z_ITERATIONS = 3
@@ -135,19 +135,68 @@ def _tridiagonal_jacobian(cm: CompiledModel):
     """``(J(p), rows, cols)`` when the model's ODE Jacobian is constant in time and
     states and its pattern with the diagonal added is the full tridiagonal band (what
     CasADi's ``tridiag`` plug-in indexes), else None; decided once per model."""
-    cached = cm._cache.get("tridiagonal_jacobian")
+    form = linear_form(cm)
+    if form is None or form.sparsity + ca.Sparsity.diag(cm.nX) != ca.Sparsity.banded(cm.nX, 1):
+        return None
+    return form.jacobian, form.rows, form.cols
+
+
+#: Fewest states for which a linear, time-invariant ODE runs in the linear form (see
+#: :func:`linear_form`): below it the compiled Rodas4 of ``solver="auto"`` or the
+#: expression graph's own evaluation cost less than a matrix-vector product's set-up.
+LINEAR_FORM_STATES = 100
+
+
+class LinearForm:
+    """A linear, time-invariant ODE ``der(X) = A(p) X + c(t, p)``: ``jacobian`` gives
+    ``A`` at the parameters (a sparse matrix of pattern ``sparsity``, nonzeros at
+    ``rows, cols``), ``offset`` gives ``c``."""
+
+    def __init__(self, jacobian: ca.Function, offset: ca.Function) -> None:
+        self.jacobian, self.offset = jacobian, offset
+        self.sparsity = jacobian.sparsity_out(0)
+        self.rows, self.cols = (np.asarray(v, dtype=np.int64)
+                                for v in self.sparsity.get_triplet())
+
+    def nonzeros(self, p: np.ndarray) -> np.ndarray:
+        """The nonzeros of ``A(p)``, column by column."""
+        with np.errstate(all="ignore"):
+            return evaluate_point(self.jacobian, [np.asarray(p, dtype=float)])
+
+
+def linear_form(cm: CompiledModel) -> LinearForm | None:
+    """The :class:`LinearForm` of an ODE model whose right-hand side is linear in the
+    states with a Jacobian that depends on the parameters alone (an RC or RLC network, a
+    thermal network, a chain of masses, springs and dampers), or None; decided once per
+    model from the expression graph, never from values.
+
+    A CVODES run of such a model (``integrate_variable``, without events, algebraic
+    unknowns or input tables, and with at least :data:`LINEAR_FORM_STATES` states)
+    evaluates its right-hand side as one sparse matrix-vector product ``A X`` with
+    ``A``'s nonzeros computed once per run, plus ``c(t, p)``: CasADi's product kernel
+    is about twice as fast as its expression-graph evaluation of the same sums on an
+    RC ladder, and the Jacobian CVODES asks for is ``A`` itself."""
+    cached = cm._cache.get("linear_form")
     if cached is None:
-        t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
-        z, p = ca.SX.sym("z", cm.nz), ca.SX.sym("p", cm.p0.size)
-        J = ca.jacobian(cm.f_ode(t, X, z, p), X)
-        band = ca.Sparsity.banded(cm.nX, 1)
         cached = False
-        if (J.sparsity() + ca.Sparsity.diag(cm.nX) == band
-                and not ca.depends_on(J, ca.vertcat(t, X))):
-            rows, cols = (np.asarray(v, dtype=np.int64) for v in J.sparsity().get_triplet())
-            cached = (ca.Function("jac_ode", [p], [J]), rows, cols)
-        cm._cache["tridiagonal_jacobian"] = cached
+        if cm.nX and not cm.nz:
+            t, X = ca.SX.sym("t"), ca.SX.sym("X", cm.nX)
+            z, p = ca.SX.sym("z", 0), ca.SX.sym("p", cm.p0.size)
+            ode = cm.f_ode(t, X, z, p)
+            J = ca.jacobian(ode, X)
+            if not ca.depends_on(J, ca.vertcat(t, X)):
+                offset = ca.substitute(ode, X, ca.DM.zeros(cm.nX))
+                # the offset keeps its structural zeros (a ladder's is nonzero in its
+                # first row only): the product's result takes it as a sparse sum
+                cached = LinearForm(ca.Function("jac_ode", [p], [J]),
+                                    ca.Function("ode_offset", [t, p], [ca.sparsify(offset)]))
+        cm._cache["linear_form"] = cached
     return cached or None
+
+
+def _uses_linear_form(cm: CompiledModel, plugin: str, drive: tuple) -> bool:
+    return (plugin == "cvodes" and not cm.nr and not drive and cm.nX >= LINEAR_FORM_STATES
+            and linear_form(cm) is not None)
 
 
 def held_states(cm: CompiledModel) -> list[int]:
@@ -202,7 +251,8 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     # takes the segment's start time as one more parameter, so that one integrator
     # serves every segment of a chunked run (see integrate_variable)
     key = ("var", plugin, grid.size, float(grid[0]), float(grid[-1]), hash(grid.tobytes()),
-           rtol, atol, max_step, drive, linear_solver, shifted)
+           rtol, atol, max_step, drive, linear_solver, shifted,
+           _uses_linear_form(cm, plugin, drive))
     cached = cm._cache.get(key)
     if cached is not None:
         return cached
@@ -218,13 +268,27 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     Xd = _hide(X, held) if held else X     # X as the step's Jacobian sees it
     z = S.sym("z", cm.nz)
     n_p = cm.p0.size + 2 * sum(n for _, n in drive)
-    p = S.sym("p", n_p + (1 if shifted else 0))
-    t = tau + p[n_p] if shifted else tau      # the model's time
-    pm = p[:n_p] if shifted else p
+    form = linear_form(cm) if key[-1] else None
+    if form is not None:      # A's nonzeros follow the parameters (see integrate_variable)
+        S = ca.MX
+        tau, Xi, z = S.sym("t"), S.sym("X", cm.nX), S.sym("z", 0)
+        X = Xi
+    n_a = form.sparsity.nnz() if form is not None else 0
+    p = S.sym("p", n_p + n_a + (1 if shifted else 0))
+    t = tau + p[n_p + n_a] if shifted else tau      # the model's time
+    pm = p[:n_p] if shifted or n_a else p
     pe = driven_parameters(cm.p0.size, t, pm, drive) if drive else pm
     u = S.sym("u", 0)
     empty = S(0, 1)
-    if S is ca.MX:
+    if form is not None:
+        # c(t, p) as one SX function of the whole parameter vector: no copy of its
+        # model part per evaluation
+        ts, ps = ca.SX.sym("t"), ca.SX.sym("p", p.numel())
+        offset = ca.Function("offset", [ts, ps], [form.offset(
+            ts + ps[n_p + n_a] if shifted else ts, ps[:n_p])])
+        ode = ca.densify(ca.mtimes(S(form.sparsity, p[n_p:n_p + n_a]), X) + offset(tau, p))
+        alg = zero = empty
+    elif S is ca.MX:
         ode, alg, zero = _model(cm)(t, Xd, z, pe)
     else:
         ode = cm.f_ode(t, X, z, pe)
@@ -295,6 +359,8 @@ def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: 
     x0 = np.ascontiguousarray(np.concatenate([X0, np.zeros(pad)]), dtype=float)
     zz0 = np.ascontiguousarray(z0, dtype=float)
     pp = np.ascontiguousarray(p, dtype=float)
+    if _uses_linear_form(cm, plugin, drive):
+        pp = np.concatenate([pp, linear_form(cm).nonzeros(pp)])
     xs = np.empty((grid.size, cm.nX + pad))
     zs = np.empty((grid.size, cm.nz))
     segments = _segments(grid, cm.nX + pad + cm.nz) if plugin in ("cvodes", "idas") else None
