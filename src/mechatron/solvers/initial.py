@@ -91,12 +91,20 @@ def initialize(cm: CompiledModel, p: np.ndarray, t0: float = 0.0):
         counters = X0[cm.nx + nr:cm.nx + 2 * nr]
         X0[cm.nx:cm.nx + nr] = initial_modes(cm, t0, X0[:cm.nx], z, p, counters)
     y = np.array(cm.f_out(t0, X0, z, p), dtype=float).ravel() if cm.targets else None
-    for k, name in enumerate(cm.state_names):
-        if cm.x_priority[k] in ("high", "low"):
-            report.append(_entry(name, cm.x_start[k], cm.x_priority[k], x[k]))
+    for k in _targeted_states(cm):
+        report.append(_entry(cm.state_names[k], cm.x_start[k], cm.x_priority[k], x[k]))
     for name, idx, value, prio in cm.targets:
         report.append(_entry(name, value, prio, float(y[idx])))
     return X0, z, report
+
+
+def _targeted_states(cm: CompiledModel) -> list[int]:
+    """The states whose start value has a priority (found once per model)."""
+    found = cm._cache.get("targeted_states")
+    if found is None:
+        found = cm._cache["targeted_states"] = [
+            k for k, prio in enumerate(cm.x_priority) if prio in ("high", "low")]
+    return found
 
 
 def _entry(name, target, priority, value) -> dict:
