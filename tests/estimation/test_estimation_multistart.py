@@ -214,6 +214,25 @@ def test_a_failed_start_is_reported_and_not_chosen(monkeypatch, problem):
         real(problem, starts=4, seed=0, workers=1, max_iterations=3)
 
 
+def test_an_error_inside_casadi_fails_its_start_only(monkeypatch, problem):
+    """CasADi reports a failure inside its own code (an integrator, a Function call) as
+    a RuntimeError: that start is failed and reported, the others go on."""
+    from mechatron.estimation import problem as module
+    real = module.estimate
+    X = start_points(problem, 3, seed=0)
+
+    def failing(prob, *, initial=None, **kw):
+        if initial is not None and initial[0] == X[1][0]:
+            raise RuntimeError("Error in Function::call for 'F' [CvodesInterface]: "
+                               "CV_CONV_FAILURE (stand-in)")
+        return real(prob, initial=initial, **kw)
+    monkeypatch.setattr(module, "estimate", failing)
+    res = real(problem, starts=3, seed=0, workers=1, max_iterations=20)
+    assert res.starts[1]["error"].startswith("RuntimeError: Error in Function::call")
+    assert res.best_start != 1 and res.starts[0]["error"] is None \
+        and res.starts[2]["error"] is None
+
+
 # --------------------------------------------------------------------------------- CLI
 MODEL_FILE = '''
 import mechatron as mt

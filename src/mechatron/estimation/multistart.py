@@ -139,7 +139,8 @@ def _fit_start(problem, job) -> dict:
                    cost=float(res.cost) if np.isfinite(res.cost) else math.inf,
                    converged=bool(res.success), message=res.message,
                    iterations=int(res.iterations), evaluations=int(res.evaluations))
-    except (MechatronError, np.linalg.LinAlgError, ArithmeticError) as exc:
+    except (MechatronError, np.linalg.LinAlgError, ArithmeticError, RuntimeError) as exc:
+        # RuntimeError: CasADi's report of a failure inside its own code
         row["error"] = f"{type(exc).__name__}: {exc}"
         row["message"] = "failed"
         res = None
