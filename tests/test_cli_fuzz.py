@@ -115,7 +115,13 @@ OPTIONS: dict[str, dict[str, list[str] | None]] = {
                   "--at": NUMBERS, "--bode": OUTS, "--json": None},
     "diagram": {"--out": ["d.svg", "d.dot", "d.txt", "no/dir/d.svg", ""]},
     "library": {"--json": None},
+    # (no --dask: an address that does not answer is waited for, not fuzzed)
+    "regression": {"--workers": ["1", "0", "-1", "x", "1e3", ""], "--json": None,
+                   "-v": None, "-q": None},
 }
+#: Model names ``regression`` is given (always at least one: without a name it checks
+#: the whole database, minutes of work).
+REGRESSION_NAMES = ["dc_motor", "dc_moter", "", "msd", "os:abort", "../../../etc/passwd"]
 #: Models fuzzed per command (the others take no model).
 TAKES_MODEL = {"show", "simulate", "compare", "codegen", "linearize", "diagram"}
 
@@ -127,7 +133,7 @@ GOOD = {"--t-stop": ["0.01", "0.05", "1e-3"], "--dt": ["1e-4", "1e-5"],
         "--variant": ["acausal", "ode"], "--out": ["log.csv", "log.parquet", "c_out",
                                                   "d.svg", "plot.png"],
         "--plot": ["plot.png"], "--bode": ["bode.png"], "--input": ["V"],
-        "--at": ["0", "0.01"], "--iterations": ["1", "3"]}
+        "--at": ["0", "0.01"], "--iterations": ["1", "3"], "--workers": ["1"]}
 
 
 @st.composite
@@ -136,6 +142,9 @@ def command_lines(draw):
     argv = [command]
     if command in TAKES_MODEL and draw(st.integers(0, 9)) > 0:
         argv.append("dc_motor" if draw(st.booleans()) else draw(st.sampled_from(MODELS)))
+    if command == "regression":
+        argv.append("dc_motor" if draw(st.booleans()) else
+                    draw(st.sampled_from(REGRESSION_NAMES)))
     options = OPTIONS[command]
     for option in draw(st.lists(st.sampled_from(sorted(options)), max_size=5)):
         values = options[option]
