@@ -158,3 +158,27 @@ def test_a_dae_keeps_the_general_path(linear):
     if not cm.nz:
         pytest.skip("the compiler solved the loop explicitly: no DAE")
     assert variable.linear_form(cm) is None
+
+
+def _mean_field(n: int):
+    """``x_i' = -(x_1 + ... + x_n)``: linear and constant, but every entry of ``A`` is
+    nonzero while the graph computes the sum once."""
+    attrs = {f"x{k}": mt.Variable("1", start=float(k + 1), doc="State") for k in range(n)}
+
+    def equations(self):
+        total = sum(getattr(self, f"x{k}") for k in range(n))
+        return [mt.der(getattr(self, f"x{k}")) == -total for k in range(n)]
+    attrs["equations"] = equations
+    return type("MeanField", (mt.Component,), attrs)()
+
+
+def test_a_denser_matrix_than_the_graph_keeps_the_graph(linear):
+    n = 12
+    cm = mt.compile_model(_mean_field(n))
+    assert cm.f_ode.n_instructions() < n * n
+    assert variable.linear_form(cm) is None
+    res = mt.simulate(cm, 0.5, **TIGHT)
+    # the sum s obeys s' = -n s; each x_k = x_k(0) + (s(t) - s(0)) / n
+    s0 = n * (n + 1) / 2
+    s = s0 * np.exp(-n * res.t)
+    np.testing.assert_allclose(res["x3"], 4.0 + (s - s0) / n, rtol=0, atol=1e-8)

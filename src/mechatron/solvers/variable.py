@@ -175,7 +175,9 @@ def linear_form(cm: CompiledModel) -> LinearForm | None:
     evaluates its right-hand side as one sparse matrix-vector product ``A X`` with
     ``A``'s nonzeros computed once per run, plus ``c(t, p)``: CasADi's product kernel
     is about twice as fast as its expression-graph evaluation of the same sums on an
-    RC ladder, and the Jacobian CVODES asks for is ``A`` itself."""
+    RC ladder, and the Jacobian CVODES asks for is ``A`` itself. A model whose ``A``
+    has more nonzeros than its right-hand side's graph has instructions keeps the
+    graph."""
     cached = cm._cache.get("linear_form")
     if cached is None:
         cached = False
@@ -184,7 +186,10 @@ def linear_form(cm: CompiledModel) -> LinearForm | None:
             z, p = ca.SX.sym("z", 0), ca.SX.sym("p", cm.p0.size)
             ode = cm.f_ode(t, X, z, p)
             J = ca.jacobian(ode, X)
-            if not ca.depends_on(J, ca.vertcat(t, X)):
+            # (the product costs about as much per nonzero as the graph per
+            # instruction: a denser A than the graph's own work keeps the graph)
+            if not ca.depends_on(J, ca.vertcat(t, X)) \
+                    and J.nnz() <= cm.f_ode.n_instructions():
                 offset = ca.substitute(ode, X, ca.DM.zeros(cm.nX))
                 # the offset keeps its structural zeros (a ladder's is nonzero in its
                 # first row only): the product's result takes it as a sparse sum
