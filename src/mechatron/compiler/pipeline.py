@@ -65,45 +65,60 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     variables read through alias elimination (a variable removed by it is a scaled
     representative or a constant): a model variable the sum of itself, a variable of a
     folded subsystem port (:mod:`mechatron.compiler.folding`) that of its terms, logged
-    where its port is declared."""
+    where its port is declared.
+
+    The rows of the model's variables come from alias elimination's arrays for all of
+    them at once (`AliasResult.representative`, `AliasResult.scale`); only the folded
+    variables, placed between them, are read term by term."""
     variables = flat.variables
-    index = {n: k for k, n in enumerate(variables)}
-    eliminated = alias.eliminated
-    names, units, docs = [], [], []
-    rows, cols, vals = [], [], []
-    constant: list[float] = []
-
-    def add(name, unit, doc, terms) -> None:
-        r = len(names)
-        names.append(name)
-        units.append(unit)
-        docs.append(doc)
-        offset = 0.0
-        entries: dict[int, float] = {}      # terms of one representative add up
-        for n, c in terms:
-            rep, k = eliminated.get(n, (n, 1.0))
-            if rep is None:
-                offset += c * k
-            else:
-                j = index[rep]
-                entries[j] = entries.get(j, 0.0) + c * k
-        rows.extend([r] * len(entries))
-        cols.extend(entries)
-        vals.extend(entries.values())
-        constant.append(offset)
-
+    n = len(variables)
+    names = list(variables)
+    units = [v.unit for v in variables.values()]
+    docs = [v.doc for v in variables.values()]
+    if alias.representative is not None:
+        rep, scale = alias.representative, alias.scale
+    else:
+        rep, scale = np.arange(n), np.ones(n)
     folded = sorted(flat.folded_variables(), key=lambda f: f[3])
-    k = 0
-    for j, (n, var) in enumerate(variables.items()):
-        while k < len(folded) and folded[k][3] <= j:
-            add(*folded[k][:3], folded[k][4])
-            k += 1
-        add(n, var.unit, var.doc, ((n, 1.0),))
-    for name, unit, doc, _, terms in folded[k:]:
-        add(name, unit, doc, terms)
-    if not names:
+    if not names and not folded:
         return names, units, docs, ca.SX(0, 1)
-    M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), len(variables))
+    # row of each model variable: after the folded variables placed before it
+    position = np.array([f[3] for f in folded], dtype=np.intp)
+    var_row = np.arange(n) + np.searchsorted(position, np.arange(n), side="right")
+    kept = rep >= 0
+    rows = var_row[kept].tolist()
+    cols = rep[kept].tolist()
+    vals = scale[kept].tolist()
+    constant = np.zeros(n + len(folded))
+    constant[var_row[~kept]] = scale[~kept]
+    if folded:
+        index = {name: k for k, name in enumerate(names)}
+        out_names, out_units, out_docs, start = [], [], [], 0
+        for k, (name, unit, doc, at, terms) in enumerate(folded):
+            at = min(at, n)
+            out_names += names[start:at]
+            out_units += units[start:at]
+            out_docs += docs[start:at]
+            start = at
+            out_names.append(name)
+            out_units.append(unit)
+            out_docs.append(doc)
+            r = k + at
+            entries: dict[int, float] = {}      # terms of one representative add up
+            for term, c in terms:
+                j = index[term]
+                if rep[j] < 0:
+                    constant[r] += c * scale[j]
+                else:
+                    entries[int(rep[j])] = entries.get(int(rep[j]), 0.0) + \
+                        c * float(scale[j])
+            rows += [r] * len(entries)
+            cols += entries
+            vals += entries.values()
+        names = out_names + names[start:]
+        units = out_units + units[start:]
+        docs = out_docs + docs[start:]
+    M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), n)
     column = ca.mtimes(M, flat.stack_variables()) + ca.DM(constant)
     return names, units, docs, ca.densify(column)
 
@@ -146,12 +161,10 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     p_syms = [p.sym for p in params]
     unknown_syms = [flat.variables[n].sym for n in alias.unknowns]
     der_syms = [ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative]
-    residuals = [eq.residual for eq in alias.equations]
-    origins = [eq.origin for eq in alias.equations]
-    owners = [eq.owner for eq in alias.equations]
-    # stacked once for the relation scan and the structural analysis (a vertcat converts
-    # each scalar from Python: about 1 us each)
-    res_vec = ca.vertcat(*residuals) if residuals else None
+    residuals, origins, owners = alias.residuals, alias.origins, alias.owners
+    # stacked once (by alias elimination) for the relation scan and the structural
+    # analysis (a vertcat converts each scalar from Python: about 1 us each)
+    res_vec = alias.stacked
     symbols = unknown_syms + der_syms + p_syms + [ctx.time]
     sym_vec = ca.vertcat(flat.stack_variables(alias.unknowns), *der_syms, *p_syms, ctx.time)
     scanned, relations = extract_relations(residuals, owners, symbols,
@@ -276,7 +289,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     report = {
         "variables": {"flat": n_vars_flat, "after_alias": len(alias.unknowns),
                       "states": len(low.states), "algebraic": len(low.alg)},
-        "equations": {"flat": n_eqs_flat, "after_alias": len(alias.equations),
+        "equations": {"flat": n_eqs_flat, "after_alias": len(alias.residuals),
                       "after_index_reduction": low.n_equations,
                       "residual": len(low.residuals)},
         "aliases_eliminated": len(alias.eliminated),
