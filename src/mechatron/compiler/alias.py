@@ -52,6 +52,8 @@ class AliasResult:
     representative: np.ndarray | None = None
     #: and the factor: ``x = scale * x[representative]``, or the constant ``x = scale``
     scale: np.ndarray | None = None
+    #: the number of each of ``unknowns`` among the model's variables
+    unknown_index: np.ndarray | None = None
 
     @property
     def equations(self) -> list[FlatEquation]:
@@ -250,7 +252,8 @@ def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
     best_of[cls[is_best]] = np.flatnonzero(is_best)
     order = np.lexsort((k, cls))               # classes in order, members in order
 
-    result.unknowns = [names[j] for j in order[is_best[order]].tolist()]
+    result.unknown_index = order[is_best[order]]
+    result.unknowns = [names[j] for j in result.unknown_index.tolist()]
     # each variable read from its representative (itself if kept), -1 for a constant,
     # times scale: x = scale * x[rep], or x = scale
     rep = np.where(is_const, -1, best_of[cls])

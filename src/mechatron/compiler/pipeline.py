@@ -159,36 +159,46 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     ctx = flat.context
     params = list(flat.parameters.values())
     p_syms = [p.sym for p in params]
-    unknown_syms = [flat.variables[n].sym for n in alias.unknowns]
+    p = ca.vertcat(*p_syms) if p_syms else ca.SX(0, 1)
     der_syms = [ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative]
     residuals, origins, owners = alias.residuals, alias.origins, alias.owners
     # stacked once (by alias elimination) for the relation scan and the structural
     # analysis (a vertcat converts each scalar from Python: about 1 us each)
     res_vec = alias.stacked
-    symbols = unknown_syms + der_syms + p_syms + [ctx.time]
-    sym_vec = ca.vertcat(flat.stack_variables(alias.unknowns), *der_syms, *p_syms, ctx.time)
-    scanned, relations = extract_relations(residuals, owners, symbols,
-                                           stacked=(sym_vec, res_vec) if residuals else None)
+    scanned, relations = extract_relations(residuals, owners, stacked=res_vec,
+                                           origins=origins)
     # the residuals unchanged (no relation in them): their stack serves the lowering; the
     # lowering's variables are the unknowns, then their derivatives
-    stacked = (res_vec, sym_vec[:len(unknown_syms) + len(der_syms)]) \
+    stacked = (res_vec, ca.vertcat(flat.stack_variables(alias.unknowns), *der_syms)) \
         if residuals and not relations else None
     residuals = scanned
     plan = prepare_events(flat, alias, relations)
     lap("relations")
 
-    syms = {n: flat.variables[n].sym for n in alias.unknowns}
-    start_of = {n: _guess(flat, alias, n) for n in alias.unknowns}   # symbols named by path
-    p_value = {p.sym.name(): p.value for p in params}
+    variables = flat.variables
+    syms = {n: variables[n].sym for n in alias.unknowns}
+    p_value = _OnDemand(lambda: {q.sym.name(): q.value for q in params})
 
     def start_guess(free):
-        return [start_of.get(s.name(), p_value.get(s.name(), 0.0)) for s in free]
+        """Start values of symbols named by path: an unknown's (see `_guess`), a
+        parameter's value, else 0."""
+        out = []
+        for s in free:
+            name = s.name()
+            if name in variables and name not in alias.eliminated:
+                out.append(_guess(flat, alias, name))
+            else:
+                out.append(p_value.get(name, 0.0))
+        return out
 
-    hints = {n: v.hint for n, v in flat.variables.items() if v.hint}
+    # the hints are read only by messages; the declaration order of the unknowns only
+    hints = _OnDemand(lambda: {n: v.hint for n, v in variables.items() if v.hint})
+    order = alias.unknown_index.tolist() if alias.unknown_index is not None else \
+        [i for i, n in enumerate(variables) if n not in alias.eliminated]
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
-                declared={n: i for i, n in enumerate(flat.variables)},
+                declared=dict(zip(alias.unknowns, order)),
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
                 classes=dict(flat.components), physical=flat.physical_owners,
                 parameters=p_syms, stacked=stacked)
@@ -232,7 +242,6 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     x = ca.vertcat(*low.state_syms) if low.state_syms else ca.SX(0, 1)
     X = ca.vertcat(x, modes, counters, tlast)
     z = ca.vertcat(*low.alg_syms) if low.alg_syms else ca.SX(0, 1)
-    p = ca.vertcat(*p_syms) if p_syms else ca.SX(0, 1)
     nr = len(relations)
     xdot = ca.vertcat(*ode, ca.SX.zeros(3 * nr)) if (ode or nr) else ca.SX(0, 1)
     args, argn = [t, X, z, p], ["t", "x", "z", "p"]
