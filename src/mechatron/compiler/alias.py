@@ -170,7 +170,7 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     gone = _classes(flat, names, index, parent, factor, const, result)
     if residuals:
         stacked = ca.vertcat(*residuals)
-        old, new = _replacements(flat, names, gone, result)
+        old, new = _replacements(flat, names, index, gone, result)
         if old is not None:
             stacked = ca.substitute(stacked, old, new)
             result.residuals = ca.vertsplit(stacked)
@@ -277,12 +277,13 @@ def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
     return gone
 
 
-def _replacements(flat, names, gone, result) -> tuple[ca.SX | None, ca.SX | None]:
+def _replacements(flat, names, index, gone, result) -> tuple[ca.SX | None, ca.SX | None]:
     """The eliminated variables and their derivatives, and what replaces them, as two
     columns for one substitution; (None, None) if nothing is replaced."""
     if not len(gone):
         return None, None
     derivative = flat.context.derivative
+    n = len(names)
     rep, scale = result.representative, result.scale
     column = flat.stack_variables()          # every variable, in declaration order
     old, new = [], []
@@ -298,13 +299,13 @@ def _replacements(flat, names, gone, result) -> tuple[ca.SX | None, ca.SX | None
     # derivatives of eliminated variables, in the order of the eliminated
     der_old, der_new = [], []
     if derivative:
-        for j in gone.tolist():
-            name = names[j]
-            if name in derivative:
-                der_old.append(derivative[name])
-                r = rep[j]
-                der_new.append(ca.SX(0.0) if r < 0 else
-                               float(scale[j]) * flat.context.der_symbol(names[r]))
+        differentiated = np.zeros(len(names), dtype=bool)
+        differentiated[[index[d] for d in derivative if index.get(d, n) < n]] = True
+        for j in gone[differentiated[gone]].tolist():
+            der_old.append(derivative[names[j]])
+            r = rep[j]
+            der_new.append(ca.SX(0.0) if r < 0 else
+                           float(scale[j]) * flat.context.der_symbol(names[r]))
     if der_old:
         old.append(ca.vertcat(*der_old))
         new.append(ca.vertcat(*der_new))

@@ -291,9 +291,10 @@ def _binary(op, a, b, b_const):
 def infer(f: ca.Function, in_dims: list, free_dims: list | None = None) -> list:
     """Dimension of every output nonzero of ``f`` (one SX input, one vector output), with
     ``in_dims[j]`` the dimension of input nonzero ``j`` and ``free_dims[j]`` that of
-    free symbol ``j`` of ``f`` (``f.free_sx()``; default: free signals). An entry is a packed dimension
-    (int), :data:`NUMBER`, :data:`FREE`, or a tuple describing the first inconsistency
-    met on the way (a *problem*, propagated to every output that depends on it)."""
+    free symbol ``j`` of ``f`` (``f.free_sx()``; default: free signals). An entry is a
+    packed dimension (int), :data:`NUMBER`, :data:`FREE`, or a tuple describing the
+    first inconsistency met on the way (a *problem*, propagated to every output that
+    depends on it)."""
     n = f.n_instructions()
     ids = list(map(_OP_OF, repeat(f, n), range(n)))
     args = list(map(_INPUTS_OF, repeat(f, n), range(n)))
@@ -310,14 +311,14 @@ def infer(f: ca.Function, in_dims: list, free_dims: list | None = None) -> list:
     out_nz = _OUTPUTS_OF        # [output, nonzero] of an output instruction
     for k, op in enumerate(ids):
         arg = args[k]
-        if op == _ADD or op == _SUB:
+        if op == _INPUT:
+            append(in_dims[arg[1]])
+        elif op == _ADD or op == _SUB:
             a, b = w[arg[0]], w[arg[1]]
             append(a if (a == b and type(a) is int) else _agree(a, b, "sum"))
         elif op == _MUL:
             a, b = w[arg[0]], w[arg[1]]
             append(a + b if type(a) is int and type(b) is int else _product(a, b, 1))
-        elif op == _INPUT:
-            append(in_dims[arg[1]])
         elif op == _OUTPUT:
             out[out_nz(f, k)[1]] = w[arg[0]]
         elif op == _CONST:

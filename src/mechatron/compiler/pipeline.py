@@ -119,7 +119,11 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         units = out_units + units[start:]
         docs = out_docs + docs[start:]
     M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), n)
-    column = ca.mtimes(M, flat.stack_variables()) + ca.DM(constant)
+    column = ca.mtimes(M, flat.stack_variables())
+    nonzero = np.flatnonzero(constant)
+    if len(nonzero):         # the constants where there are any (a sparse column)
+        column = column + ca.DM.triplet(nonzero.tolist(), [0] * len(nonzero),
+                                        ca.DM(constant[nonzero].tolist()), len(names), 1)
     return names, units, docs, ca.densify(column)
 
 
@@ -212,9 +216,12 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     bind_pre(plan, flat, alias, list(low.states), shadow)
     ini = _initial_residuals(flat, alias)
     n_ini = len(ini)
-    n_dist = n_ode + n_res
-    # the logged variables ride along as one column, last
-    pile = list(low.ode) + list(low.residuals) + dists + ini + plan.exprs + [out_col]
+    # the derivatives and the residuals ride along as one column each (converted from
+    # Python once), the logged variables as one column, last
+    ode_col = ca.vertcat(*low.ode) if n_ode else ca.SX(0, 1)
+    res_col = ca.vertcat(*low.residuals) if n_res else ca.SX(0, 1)
+    n_dist = 2
+    pile = [ode_col, res_col] + dists + ini + plan.exprs + [out_col]
     if low.assigned:
         _, pile = ca.substitute_inplace(low.assigned, low.assigned_expr, pile, False)
     if plan:   # action right-hand sides: relations read directly, not through modes
@@ -230,8 +237,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         values = [modes[k] if r.op == "sign" else (1 - modes[k]) / 2 if r.op == "initial"
                   else (modes[k] + 1) / 2 for k, r in enumerate(relations)]
         pile = ca.substitute(pile, [r.placeholder for r in relations], values)
-    ode = pile[:n_ode]
-    res = pile[n_ode:n_ode + n_res]
+    ode_col, res_col = pile[0], pile[1]
     dist = pile[n_dist:n_dist + len(dists)]
     ini = pile[n_dist + len(dists):-1]
     out_col = pile[-1]
@@ -243,10 +249,10 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     X = ca.vertcat(x, modes, counters, tlast)
     z = ca.vertcat(*low.alg_syms) if low.alg_syms else ca.SX(0, 1)
     nr = len(relations)
-    xdot = ca.vertcat(*ode, ca.SX.zeros(3 * nr)) if (ode or nr) else ca.SX(0, 1)
+    xdot = ca.vertcat(ode_col, ca.SX.zeros(3 * nr)) if (n_ode or nr) else ca.SX(0, 1)
     args, argn = [t, X, z, p], ["t", "x", "z", "p"]
     f_ode = ca.Function("ode", args, [xdot], argn, ["ode"])
-    f_alg = ca.Function("alg", args, [ca.vertcat(*res) if res else ca.SX(0, 1)], argn,
+    f_alg = ca.Function("alg", args, [res_col], argn,
                         ["alg"])
     f_out = ca.Function("out", args, [out_col], argn,
                         ["y"])
