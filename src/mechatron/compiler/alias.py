@@ -75,9 +75,13 @@ def _read_alias(r: ca.SX, unknowns) -> tuple | None:
     """What a residual without a template hint says: ("pair", a, b, s) for a = s*b,
     ("const", a, value) for a = value, or None."""
     if r.is_op(ca.OP_SUB) or r.is_op(ca.OP_ADD):
-        lhs, rhs = r.dep(0), r.dep(1)
+        lhs = r.dep(0)
+        la = _signed_symbol(lhs, unknowns)
+        if la is None and not lhs.is_constant():
+            return None             # a sum of more terms, a product, ...: not an alias
+        rhs = r.dep(1)
         sign = -1.0 if r.is_op(ca.OP_SUB) else 1.0
-        la, ra = _signed_symbol(lhs, unknowns), _signed_symbol(rhs, unknowns)
+        ra = _signed_symbol(rhs, unknowns)
         if la and ra:
             # la_s*a + sign*ra_s*b = 0 -> a = -(sign*rs/ls) b
             return "pair", la[0], ra[0], -sign * ra[1] / la[1]
@@ -225,29 +229,44 @@ def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
         value[list(const)] = list(const.values())
     is_const = is_const[up]
 
-    # _rank of every variable as sortable integer columns; the declared attributes
-    # take few distinct values: one code per combination
+    # _rank of every variable as sortable integers: its first three entries (priority
+    # of a start value, differentiated, kind) packed in one; the declared attributes
+    # take few distinct values, one code per combination
     keys = [(v.start is not None, v.priority, v.kind) for v in flat.variables.values()]
     table = dict.fromkeys(keys)
     for c, key in enumerate(table):
         table[key] = c
     codes = np.array(list(map(table.__getitem__, keys)), dtype=np.intp)
     has_start = np.array([key[0] for key in table], dtype=bool)[codes]
-    priority = np.array([_PRIORITY_RANK.get(key[1], 0) if key[0] else 0
-                         for key in table], dtype=np.int64)[codes]
-    kind = np.array([_KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
-    differentiated = np.zeros(n, dtype=np.int64)
+    rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
+                     _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
     if derivative:
-        differentiated[[index[d] for d in derivative if d in index and index[d] < n]] = 1
-    dots = np.array(list(map(str.count, names, repeat("."))), dtype=np.int64)
-    length = np.array(list(map(len, names)), dtype=np.int64)
+        rank[[index[d] for d in derivative if d in index and index[d] < n]] += 4
     k = np.arange(n)
     # each class together, in class order; in a class the best member first (highest
     # rank, the first declared among equals)
-    ranked = np.lexsort((k, length, dots, -kind, -differentiated, -priority, cls))
+    ranked = np.lexsort((k, -rank, cls))
+    head = np.r_[True, cls[ranked][1:] != cls[ranked][:-1]]
     is_best = np.zeros(n, dtype=bool)
-    is_best[ranked[np.r_[True, cls[ranked][1:] != cls[ranked][:-1]]]] = True
+    is_best[ranked[head]] = True
     is_best &= ~is_const
+    # classes whose best members tie on those: the fewest dots in the path, then the
+    # shortest (_rank's last entries), read off the names of the tied members only
+    top = np.zeros(n, dtype=np.int64)
+    top[cls[ranked[head]]] = rank[ranked[head]]
+    tied = (rank == top[cls]) & ~is_const
+    count = np.bincount(cls[tied], minlength=n)
+    tied &= count[cls] > 1
+    if tied.any():
+        members = np.flatnonzero(tied)
+        member_names = [names[j] for j in members.tolist()]
+        dots = np.array(list(map(str.count, member_names, repeat("."))), dtype=np.int64)
+        length = np.array(list(map(len, member_names)), dtype=np.int64)
+        c = cls[members]
+        again = np.lexsort((members, length, dots, c))
+        first = np.r_[True, c[again][1:] != c[again][:-1]]
+        is_best[members] = False
+        is_best[members[again[first]]] = True
     best_of = np.zeros(n, dtype=np.intp)       # the representative of each class
     best_of[cls[is_best]] = np.flatnonzero(is_best)
     order = np.lexsort((k, cls))               # classes in order, members in order
