@@ -15,6 +15,7 @@ substituted in one CasADi call and kept stacked for the passes after this one.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from itertools import repeat
 from operator import attrgetter
@@ -40,7 +41,7 @@ class AliasResult:
     origins: list                                     # origin of each
     owners: list[str]                                 # owner of each
     unknowns: list[str]                               # remaining variable names
-    eliminated: dict[str, tuple[str | None, float]] = field(default_factory=dict)
+    eliminated: Mapping[str, tuple[str | None, float]] = field(default_factory=dict)
     # name -> (representative or None for a constant, factor or constant value)
     starts: dict[str, tuple[float, str, str]] = field(default_factory=dict)
     # representative -> (start, priority, the variable the target was given on)
@@ -182,6 +183,55 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     return result
 
 
+class _Eliminated(Mapping):
+    """The eliminated variables, name -> (representative, or None for a constant; the
+    factor, or the constant), read off alias elimination's arrays on request: a
+    dictionary of every one is formed only if they are all read. In the order of the
+    classes, members in declaration order."""
+
+    def __init__(self, names: list[str], index: dict, gone: np.ndarray,
+                 is_gone: np.ndarray, rep: np.ndarray, scale: np.ndarray):
+        self._names, self._index, self._gone = names, index, gone
+        self._is_gone, self._rep, self._scale = is_gone, rep, scale
+        self._all: dict | None = None
+
+    def _number(self, name) -> int | None:
+        j = self._index.get(name)   # a plain lookup: no number for a new name
+        if j is None or j >= len(self._names) or not self._is_gone[j]:
+            return None
+        return j
+
+    def __getitem__(self, name):
+        j = self._number(name)
+        if j is None:
+            raise KeyError(name)
+        r = int(self._rep[j])
+        return (None if r < 0 else self._names[r], float(self._scale[j]))
+
+    def __contains__(self, name) -> bool:
+        return self._number(name) is not None
+
+    def __len__(self) -> int:
+        return len(self._gone)
+
+    def _dict(self) -> dict:
+        if self._all is None:
+            names, gone = self._names, self._gone
+            reps = [names[r] if r >= 0 else None for r in self._rep[gone].tolist()]
+            self._all = dict(zip([names[j] for j in gone.tolist()],
+                                 zip(reps, self._scale[gone].tolist())))
+        return self._all
+
+    def __iter__(self):
+        return iter(self._dict())
+
+    def items(self):
+        return self._dict().items()
+
+    def __repr__(self) -> str:
+        return repr(self._dict())
+
+
 _RESIDUAL, _ORIGIN, _OWNER = (attrgetter("residual"), attrgetter("origin"),
                                attrgetter("owner"))
 
@@ -279,9 +329,7 @@ def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
     scale = np.where(is_const, f * value[up], f / f[np.where(is_const, k, rep)])
     result.representative, result.scale = rep, scale
     gone = order[~is_best[order]]
-    reps = [names[r] if r >= 0 else None for r in rep[gone].tolist()]
-    result.eliminated = dict(zip([names[j] for j in gone.tolist()],
-                                 zip(reps, scale[gone].tolist())))
+    result.eliminated = _Eliminated(names, index, gone, ~is_best, rep, scale)
 
     # start values, class by class (the members that have one, in order)
     with_start = order[has_start[order] & ~is_const[order]]

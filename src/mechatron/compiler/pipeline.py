@@ -384,12 +384,14 @@ def _state_preference(flat, alias) -> dict[str, float]:
     its alias class, plus one half for a high-priority start value (the coordinates a
     user fixes initially are the ones to integrate). Only nonzero entries."""
     pref: dict[str, float] = {}
-    for n, var in flat.variables.items():
-        level = _STATE_SELECT.get(var.state_select, 0.0)
-        if level:
-            rep = alias.eliminated.get(n, (n, 1.0))[0]
-            if rep is not None:
-                pref[rep] = max(pref.get(rep, level), level)
+    selects = [v.state_select for v in flat.variables.values()]
+    if any(_STATE_SELECT.get(s, 0.0) for s in set(selects)):   # else nothing to read
+        for n, select in zip(flat.variables, selects):
+            level = _STATE_SELECT.get(select, 0.0)
+            if level:
+                rep = alias.eliminated.get(n, (n, 1.0))[0]
+                if rep is not None:
+                    pref[rep] = max(pref.get(rep, level), level)
     for rep, (_, prio, _) in alias.starts.items():
         if prio == "high":
             pref[rep] = pref.get(rep, 0.0) + 0.5
