@@ -5,13 +5,23 @@ and their variables replaced by one representative (or the constant) in one bulk
 substitution over every remaining equation. Connections produce most aliases; component
 equations such as ``i == p.i`` produce the rest. The eliminated variables stay in the
 simulation log, computed from their representative.
+
+Speed: the variables are numbered in declaration order; the union-find runs on integer
+lists, and the classes, their representatives and the factors of their members are
+read off NumPy arrays for all classes at once (the representative is the first member
+of highest rank in one sorted order of keys). The remaining residuals are stacked once,
+substituted in one CasADi call and kept stacked for the passes after this one.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from itertools import repeat
+from operator import attrgetter
 
 import casadi as ca
+import numpy as np
 
 from mechatron.compiler.flatten import FlatEquation, FlatModel
 from mechatron.errors import InitializationError
@@ -24,13 +34,33 @@ _KIND_RANK = {"variable": 3, "output": 2, "across": 1, "through": 1, "input": 0}
 
 @dataclass
 class AliasResult:
-    equations: list[FlatEquation]
+    """What alias elimination leaves: the remaining equations (as parallel lists and
+    stacked in one column), the remaining variables, and how to recover the others."""
+
+    residuals: list[ca.SX]                            # remaining residuals, in order
+    origins: list                                     # origin of each
+    owners: list[str]                                 # owner of each
     unknowns: list[str]                               # remaining variable names
-    eliminated: dict[str, tuple[str | None, float]] = field(default_factory=dict)
+    eliminated: Mapping[str, tuple[str | None, float]] = field(default_factory=dict)
     # name -> (representative or None for a constant, factor or constant value)
     starts: dict[str, tuple[float, str, str]] = field(default_factory=dict)
     # representative -> (start, priority, the variable the target was given on)
     n_before: int = 0
+    #: ``vertcat(*residuals)``, or None without residuals
+    stacked: ca.SX | None = None
+    #: for each model variable (in declaration order) the number of the variable it is
+    #: read from (itself if kept, its representative if eliminated, -1 for a constant)
+    representative: np.ndarray | None = None
+    #: and the factor: ``x = scale * x[representative]``, or the constant ``x = scale``
+    scale: np.ndarray | None = None
+    #: the number of each of ``unknowns`` among the model's variables
+    unknown_index: np.ndarray | None = None
+
+    @property
+    def equations(self) -> list[FlatEquation]:
+        """The remaining equations as :class:`FlatEquation` (formed on request)."""
+        return [FlatEquation(r, o, w)
+                for r, o, w in zip(self.residuals, self.origins, self.owners)]
 
 
 def _signed_symbol(expr: ca.SX, unknowns) -> tuple[str, float] | None:
@@ -42,154 +72,316 @@ def _signed_symbol(expr: ca.SX, unknowns) -> tuple[str, float] | None:
     return None
 
 
+def _read_alias(r: ca.SX, unknowns) -> tuple | None:
+    """What a residual without a template hint says: ("pair", a, b, s) for a = s*b,
+    ("const", a, value) for a = value, or None."""
+    if r.is_op(ca.OP_SUB) or r.is_op(ca.OP_ADD):
+        lhs = r.dep(0)
+        la = _signed_symbol(lhs, unknowns)
+        if la is None and not lhs.is_constant():
+            return None             # a sum of more terms, a product, ...: not an alias
+        rhs = r.dep(1)
+        sign = -1.0 if r.is_op(ca.OP_SUB) else 1.0
+        ra = _signed_symbol(rhs, unknowns)
+        if la and ra:
+            # la_s*a + sign*ra_s*b = 0 -> a = -(sign*rs/ls) b
+            return "pair", la[0], ra[0], -sign * ra[1] / la[1]
+        if la and rhs.is_constant():
+            return "const", la[0], -sign * float(rhs) / la[1]
+        if ra and lhs.is_constant():
+            return "const", ra[0], -float(lhs) / (sign * ra[1])
+        return None
+    one = _signed_symbol(r, unknowns)
+    return ("const", one[0], 0.0) if one else None
+
+
 def eliminate_aliases(flat: FlatModel) -> AliasResult:
     """Find alias classes, pick representatives, substitute in bulk."""
     unknowns = flat.variables      # read only
-    parent: dict[str, str] = {}    # never a name to itself: a root has no entry
-    factor: dict[str, float] = {}  # name = factor * parent
-    const: dict[str, float] = {}   # root -> constant value (root = const)
+    names = list(unknowns)
+    n = len(names)
+    parent = list(range(n))        # a root is its own parent
+    factor = [1.0] * n             # x[k] = factor[k] * x[parent[k]]
+    const: dict[int, float] = {}   # root -> constant value (root = const)
+    index = _Numbers(zip(names, range(n)), parent, factor)
 
-    def find(a: str) -> tuple[str, float]:
+    def find(a: int) -> tuple[int, float]:
         """Root of ``a`` and the factor with a = factor * root (path compressed)."""
-        up = parent.get(a)
-        if up is None:
+        up = parent[a]
+        if up == a:
             return a, 1.0
-        if up not in parent:           # a child of its root: nothing to compress
+        if parent[up] == up:           # a child of its root: nothing to compress
             return up, factor[a]
         path = []
-        while a in parent:
+        while parent[a] != a:
             path.append(a)
             a = parent[a]
         acc = 1.0
         for node in reversed(path):
             acc = factor[node] * acc
             parent[node], factor[node] = a, acc
-        return a, (factor[path[0]] if path else 1.0)
+        return a, factor[path[0]]
 
     def union(a: str, b: str, s: float) -> bool:
         """Record a = s*b; return False if that adds nothing new (a redundant equation)."""
-        ra, fa = find(a)
-        rb, fb = find(b)
+        ra, fa = find(index[a])
+        rb, fb = find(index[b])
         if ra == rb:
             return False
         k = s * fb / fa  # ra = k * rb
-        if ra in const and rb in const and abs(const[ra] - k * const[rb]) > 0:
+        if const and ra in const and rb in const and abs(const[ra] - k * const[rb]) > 0:
             return False
         parent[ra], factor[ra] = rb, k
         if ra in const:
             const[rb] = const.pop(ra) / k
         return True
 
-    remaining: list[FlatEquation] = []
-    n_before = len(flat.equations) + len(flat.aliases)
+    def fix(a: str, value: float) -> bool:
+        """Record a = value; False if the class of ``a`` has a value already."""
+        root, f = find(index[a])
+        if root in const:
+            return False
+        const[root] = value / f
+        return True
+
+    redundant: list[FlatEquation] = []
     for a, b, s, origin in flat.aliases:
         if not union(a, b, s):
-            remaining.append(FlatEquation(unknowns[a].sym - s * unknowns[b].sym, origin))
+            redundant.append(FlatEquation(unknowns[a].sym - s * unknowns[b].sym, origin))
+    kept = redundant
+    keep = kept.append
     for eq in flat.equations:
-        r = eq.residual
-        handled = False
         hint = eq.alias              # read off the class's template once (flatten)
-        if hint is not None:
-            if hint[0] == "pair":
-                handled = union(hint[1], hint[2], hint[3])
-            elif hint[0] == "const":
-                root, f = find(hint[1])
-                if root not in const:
-                    const[root] = hint[2] / f
-                    handled = True
-        elif r.is_op(ca.OP_SUB) or r.is_op(ca.OP_ADD):
-            lhs, rhs = r.dep(0), r.dep(1)
-            sign = -1.0 if r.is_op(ca.OP_SUB) else 1.0
-            la, ra_ = _signed_symbol(lhs, unknowns), _signed_symbol(rhs, unknowns)
-            if la and ra_:
-                # la_s*a + sign*ra_s*b = 0 -> a = -(sign*rs/ls) b
-                handled = union(la[0], ra_[0], -sign * ra_[1] / la[1])
-            elif la and rhs.is_constant():
-                root, f = find(la[0])
-                value = -sign * float(rhs) / la[1]   # a = value
-                if root not in const:
-                    const[root] = value / f
-                    handled = True
-            elif ra_ and lhs.is_constant():
-                root, f = find(ra_[0])
-                value = -float(lhs) / (sign * ra_[1])
-                if root not in const:
-                    const[root] = value / f
-                    handled = True
-        elif _signed_symbol(r, unknowns):
-            name, s = _signed_symbol(r, unknowns)
-            root, f = find(name)
-            if root not in const:
-                const[root] = 0.0
-                handled = True
-        if not handled:
-            remaining.append(eq)
-
-    # pick representatives: re-root each class at its best member
-    classes: dict[str, list[tuple[str, float]]] = {}
-    for name in unknowns:
-        root, f = find(name)
-        classes.setdefault(root, []).append((name, f))
-    derivative = flat.context.derivative
-    result = AliasResult(remaining, [], n_before=n_before)
-    old: list[ca.SX] = []
-    new: list[ca.SX] = []        # replacement = factor * new (one product in bulk)
-    factors: list[float] = []
-    # variables replaced by a scaled representative, by name: their columns are slices
-    # of the stacked variable symbols (FlatModel.stack_variables), not stacked again
-    old_names: list[str] = []
-    new_names: list[str] = []
-    name_factors: list[float] = []
-    for root, members in classes.items():
-        if root in const:
-            value_root = const[root]
-            for name, f in members:
-                result.eliminated[name] = (None, f * value_root)
-                old.append(unknowns[name].sym)
-                new.append(ca.SX(1.0))
-                factors.append(f * value_root)
-                if name in derivative:
-                    old.append(derivative[name])
-                    new.append(ca.SX(1.0))
-                    factors.append(0.0)
-            continue
-        if len(members) == 1:
-            best_name, best_f = members[0]
-            result.unknowns.append(best_name)
-            if unknowns[best_name].start is not None:
-                _merge_starts(result, flat, best_name, [(best_name, 1.0)])
-            continue
-        best_name, best_f = max(members, key=lambda m: _rank(unknowns[m[0]], m[0] in
-                                                             derivative))
-        result.unknowns.append(best_name)
-        for name, f in members:
-            if name == best_name:
+        if hint is None:
+            hint = _read_alias(eq.residual, unknowns)
+            if hint is None:
+                keep(eq)
                 continue
-            k = f / best_f  # name = k * best
-            result.eliminated[name] = (best_name, k)
-            old_names.append(name)
-            new_names.append(best_name)
-            name_factors.append(k)
-            if name in derivative:
-                old.append(derivative[name])
-                new.append(flat.context.der_symbol(best_name))
-                factors.append(k)
-        _merge_starts(result, flat, best_name, [(n, f / best_f) for n, f in members])
-    if old or old_names:
-        pairs = []
-        if old_names:
-            pairs.append((flat.stack_variables(old_names),
-                          flat.stack_variables(new_names) * ca.DM(name_factors)))
-        if old:
-            pairs.append((ca.vertcat(*old), ca.vertcat(*new) * ca.DM(factors)))
-        res = ca.substitute([eq.residual for eq in remaining], [p[0] for p in pairs],
-                            [p[1] for p in pairs])
-        result.equations = [FlatEquation(r, eq.origin, eq.owner)
-                            for r, eq in zip(res, remaining)]
+        tag = hint[0]
+        if tag == "pair":
+            if union(hint[1], hint[2], hint[3]):
+                continue
+        elif tag == "const":
+            if fix(hint[1], hint[2]):
+                continue
+        keep(eq)
+    residuals = list(map(_RESIDUAL, kept))
+    origins = list(map(_ORIGIN, kept))
+    owners = list(map(_OWNER, kept))
+    n_before = len(flat.equations) + len(flat.aliases)
+    result = AliasResult(residuals, origins, owners, [], n_before=n_before)
+    if not n:
+        return result
+    gone = _classes(flat, names, index, parent, factor, const, result)
+    if residuals:
+        stacked = ca.vertcat(*residuals)
+        old, new = _replacements(flat, names, index, gone, result)
+        if old is not None:
+            stacked = ca.substitute(stacked, old, new)
+            result.residuals = ca.vertsplit(stacked)
+        result.stacked = stacked
     return result
 
 
+class _Eliminated(Mapping):
+    """The eliminated variables, name -> (representative, or None for a constant; the
+    factor, or the constant), read off alias elimination's arrays on request: a
+    dictionary of every one is formed only if they are all read. In the order of the
+    classes, members in declaration order."""
+
+    def __init__(self, names: list[str], index: dict, gone: np.ndarray,
+                 is_gone: np.ndarray, rep: np.ndarray, scale: np.ndarray):
+        self._names, self._index, self._gone = names, index, gone
+        self._is_gone, self._rep, self._scale = is_gone, rep, scale
+        self._all: dict | None = None
+
+    def _number(self, name) -> int | None:
+        j = self._index.get(name)   # a plain lookup: no number for a new name
+        if j is None or j >= len(self._names) or not self._is_gone[j]:
+            return None
+        return j
+
+    def __getitem__(self, name):
+        j = self._number(name)
+        if j is None:
+            raise KeyError(name)
+        r = int(self._rep[j])
+        return (None if r < 0 else self._names[r], float(self._scale[j]))
+
+    def __contains__(self, name) -> bool:
+        return self._number(name) is not None
+
+    def __len__(self) -> int:
+        return len(self._gone)
+
+    def _dict(self) -> dict:
+        if self._all is None:
+            names, gone = self._names, self._gone
+            reps = [names[r] if r >= 0 else None for r in self._rep[gone].tolist()]
+            self._all = dict(zip([names[j] for j in gone.tolist()],
+                                 zip(reps, self._scale[gone].tolist())))
+        return self._all
+
+    def __iter__(self):
+        return iter(self._dict())
+
+    def items(self):
+        return self._dict().items()
+
+    def __repr__(self) -> str:
+        return repr(self._dict())
+
+
+_RESIDUAL, _ORIGIN, _OWNER = (attrgetter("residual"), attrgetter("origin"),
+                               attrgetter("owner"))
+
+
+class _Numbers(dict):
+    """Variable name -> number for the union-find; a name that is not a model variable
+    gets a number past theirs on first use (it joins classes, but is neither kept nor
+    eliminated)."""
+
+    def __init__(self, items, parent: list, factor: list):
+        super().__init__(items)
+        self.parent, self.factor = parent, factor
+
+    def __missing__(self, name: str) -> int:
+        j = self[name] = len(self.parent)
+        self.parent.append(j)
+        self.factor.append(1.0)
+        return j
+
+
+def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
+    """Every alias class with its representative: the unknowns, the eliminated
+    variables (returned, by number, in order) and the start values of ``result``, class
+    by class in the order of each class's first member, members in declaration order."""
+    n = len(names)
+    derivative = flat.context.derivative
+    up = np.array(parent, dtype=np.intp)
+    f = np.array(factor)
+    while True:                       # pointer jumping: every node onto its root
+        nxt = up[up]
+        if np.array_equal(nxt, up):
+            break
+        # the factors are signs (a == b, a == -b): products exact in any order
+        f = f * f[up]
+        up = nxt
+    up, f = up[:n], f[:n]             # the model's variables (see node())
+    roots, first = np.unique(up, return_index=True)
+    position = np.zeros(len(parent), dtype=np.intp)   # a class's place: its first member
+    position[roots] = first
+    cls = position[up]
+    is_const = np.zeros(len(parent), dtype=bool)
+    value = np.zeros(len(parent))     # the constant of a class, at its root
+    if const:
+        is_const[list(const)] = True
+        value[list(const)] = list(const.values())
+    is_const = is_const[up]
+
+    # _rank of every variable as sortable integers: its first three entries (priority
+    # of a start value, differentiated, kind) packed in one; the declared attributes
+    # take few distinct values, one code per combination
+    keys = [(v.start is not None, v.priority, v.kind) for v in flat.variables.values()]
+    table = dict.fromkeys(keys)
+    for c, key in enumerate(table):
+        table[key] = c
+    codes = np.array(list(map(table.__getitem__, keys)), dtype=np.intp)
+    has_start = np.array([key[0] for key in table], dtype=bool)[codes]
+    rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
+                     _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
+    if derivative:
+        rank[[index[d] for d in derivative if d in index and index[d] < n]] += 4
+    k = np.arange(n)
+    # each class together, in class order; in a class the best member first (highest
+    # rank, the first declared among equals)
+    ranked = np.lexsort((k, -rank, cls))
+    head = np.r_[True, cls[ranked][1:] != cls[ranked][:-1]]
+    is_best = np.zeros(n, dtype=bool)
+    is_best[ranked[head]] = True
+    is_best &= ~is_const
+    # classes whose best members tie on those: the fewest dots in the path, then the
+    # shortest (_rank's last entries), read off the names of the tied members only
+    top = np.zeros(n, dtype=np.int64)
+    top[cls[ranked[head]]] = rank[ranked[head]]
+    tied = (rank == top[cls]) & ~is_const
+    count = np.bincount(cls[tied], minlength=n)
+    tied &= count[cls] > 1
+    if tied.any():
+        members = np.flatnonzero(tied)
+        member_names = [names[j] for j in members.tolist()]
+        dots = np.array(list(map(str.count, member_names, repeat("."))), dtype=np.int64)
+        length = np.array(list(map(len, member_names)), dtype=np.int64)
+        c = cls[members]
+        again = np.lexsort((members, length, dots, c))
+        first = np.r_[True, c[again][1:] != c[again][:-1]]
+        is_best[members] = False
+        is_best[members[again[first]]] = True
+    best_of = np.zeros(n, dtype=np.intp)       # the representative of each class
+    best_of[cls[is_best]] = np.flatnonzero(is_best)
+    order = np.lexsort((k, cls))               # classes in order, members in order
+
+    result.unknown_index = order[is_best[order]]
+    result.unknowns = [names[j] for j in result.unknown_index.tolist()]
+    # each variable read from its representative (itself if kept), -1 for a constant,
+    # times scale: x = scale * x[rep], or x = scale
+    rep = np.where(is_const, -1, best_of[cls])
+    scale = np.where(is_const, f * value[up], f / f[np.where(is_const, k, rep)])
+    result.representative, result.scale = rep, scale
+    gone = order[~is_best[order]]
+    result.eliminated = _Eliminated(names, index, gone, ~is_best, rep, scale)
+
+    # start values, class by class (the members that have one, in order)
+    with_start = order[has_start[order] & ~is_const[order]]
+    if len(with_start):
+        groups: dict[int, list] = {}
+        for j, c in zip(with_start.tolist(), cls[with_start].tolist()):
+            groups.setdefault(c, []).append(j)
+        for c, members in groups.items():
+            b = int(best_of[c])
+            _merge_starts(result, flat, names[b],
+                          [(names[j], float(f[j] / f[b])) for j in members])
+    return gone
+
+
+def _replacements(flat, names, index, gone, result) -> tuple[ca.SX | None, ca.SX | None]:
+    """The eliminated variables and their derivatives, and what replaces them, as two
+    columns for one substitution; (None, None) if nothing is replaced."""
+    if not len(gone):
+        return None, None
+    derivative = flat.context.derivative
+    n = len(names)
+    rep, scale = result.representative, result.scale
+    column = flat.stack_variables()          # every variable, in declaration order
+    old, new = [], []
+    fixed = rep[gone] < 0
+    scaled = gone[~fixed]
+    if len(scaled):
+        old.append(column[scaled.tolist()])
+        new.append(column[rep[scaled].tolist()] * ca.DM(scale[scaled].tolist()))
+    if fixed.any():
+        constants = gone[fixed]
+        old.append(column[constants.tolist()])
+        new.append(ca.SX(ca.DM(scale[constants].tolist())))
+    # derivatives of eliminated variables, in the order of the eliminated
+    der_old, der_new = [], []
+    if derivative:
+        differentiated = np.zeros(len(names), dtype=bool)
+        differentiated[[index[d] for d in derivative if index.get(d, n) < n]] = True
+        for j in gone[differentiated[gone]].tolist():
+            der_old.append(derivative[names[j]])
+            r = rep[j]
+            der_new.append(ca.SX(0.0) if r < 0 else
+                           float(scale[j]) * flat.context.der_symbol(names[r]))
+    if der_old:
+        old.append(ca.vertcat(*der_old))
+        new.append(ca.vertcat(*der_new))
+    return ca.vertcat(*old), ca.vertcat(*new)
+
+
 def _rank(var, differentiated: bool):
+    """How well a variable represents its class (the highest wins): a start value by its
+    priority, differentiated, its kind, then the shortest path."""
     return (_PRIORITY_RANK.get(var.priority, 0) if var.start is not None else 0,
             differentiated, _KIND_RANK.get(var.kind, 0), -var.name.count("."),
             -len(var.name))

@@ -35,7 +35,9 @@ subclasses) is exempt for its own equations; ``compile_model(model,
 check_dimensions=False)`` skips the pass.
 
 Speed: one CasADi function over the residuals of all equations, built without reuse of
-the work vector, is read instruction by instruction (``instruction_id`` /
+the work vector, with the model's stacked variables as its input (parameters,
+derivatives and time are its free symbols, their dimensions looked up by name for the
+few it meets), is read instruction by instruction (``instruction_id`` /
 ``instruction_input``) in one Python loop; a dimension is a single integer (the seven SI
 base exponents, in 1/2520ths, packed in bit fields), so combining two is one integer
 addition. Equations that fail are walked a second time, their left and right sides
@@ -286,11 +288,13 @@ def _binary(op, a, b, b_const):
     return FREE
 
 
-def infer(f: ca.Function, in_dims: list) -> list:
+def infer(f: ca.Function, in_dims: list, free_dims: list | None = None) -> list:
     """Dimension of every output nonzero of ``f`` (one SX input, one vector output), with
-    ``in_dims[j]`` the dimension of input nonzero ``j``. An entry is a packed dimension
-    (int), :data:`NUMBER`, :data:`FREE`, or a tuple describing the first inconsistency
-    met on the way (a *problem*, propagated to every output that depends on it)."""
+    ``in_dims[j]`` the dimension of input nonzero ``j`` and ``free_dims[j]`` that of
+    free symbol ``j`` of ``f`` (``f.free_sx()``; default: free signals). An entry is a
+    packed dimension (int), :data:`NUMBER`, :data:`FREE`, or a tuple describing the
+    first inconsistency met on the way (a *problem*, propagated to every output that
+    depends on it)."""
     n = f.n_instructions()
     ids = list(map(_OP_OF, repeat(f, n), range(n)))
     args = list(map(_INPUTS_OF, repeat(f, n), range(n)))
@@ -299,17 +303,22 @@ def infer(f: ca.Function, in_dims: list) -> list:
     w: list = []
     consts: dict[int, float] = {}
     append = w.append
+    # CasADi lists the free symbols in the order of their instructions
+    if free_dims is not None and ids.count(_PARAM) != len(free_dims):
+        raise RuntimeError("dimension check: unexpected CasADi layout of free symbols; "
+                           "please report this with the CasADi version.")
+    free = iter(free_dims if free_dims is not None else ())
     out_nz = _OUTPUTS_OF        # [output, nonzero] of an output instruction
     for k, op in enumerate(ids):
         arg = args[k]
-        if op == _ADD or op == _SUB:
+        if op == _INPUT:
+            append(in_dims[arg[1]])
+        elif op == _ADD or op == _SUB:
             a, b = w[arg[0]], w[arg[1]]
             append(a if (a == b and type(a) is int) else _agree(a, b, "sum"))
         elif op == _MUL:
             a, b = w[arg[0]], w[arg[1]]
             append(a + b if type(a) is int and type(b) is int else _product(a, b, 1))
-        elif op == _INPUT:
-            append(in_dims[arg[1]])
         elif op == _OUTPUT:
             out[out_nz(f, k)[1]] = w[arg[0]]
         elif op == _CONST:
@@ -319,7 +328,7 @@ def infer(f: ca.Function, in_dims: list) -> list:
             a, b = w[arg[0]], w[arg[1]]
             append(a - b if type(a) is int and type(b) is int else _product(a, b, -1))
         elif op == _PARAM:
-            append(FREE)
+            append(next(free, FREE))
         elif len(arg) == 1:
             append(_unary(op, w[arg[0]]))
         else:
@@ -344,35 +353,33 @@ def _function(exprs: list, syms: ca.SX) -> ca.Function:
 
 # -- the pass --------------------------------------------------------------------------
 class _Symbols:
-    """The model's symbols in one vector and the dimension of each."""
+    """The model's variables in one vector (the input of the walk) and the dimension of
+    each; the dimension of any other symbol (a parameter, a derivative, time: free
+    symbols of the walk) by its name, looked up only for the symbols met."""
 
     def __init__(self, flat):
-        ctx = flat.context
-        physical = flat.physical_owners
-        syms, dims = [], []
+        self.flat = flat
         self.declared: dict[int, str] = {}
-        by_name: dict[str, object] = {}
-        for name, v in flat.variables.items():
-            d = self._dim(v.unit)
-            if d == ONE and (v.kind == "input" or v.kind == "output" or
-                             (v.kind == "variable" and v.owner not in physical)):
-                d = FREE
-            dims.append(d)
-            by_name[name] = d
-        for p in flat.parameters.values():
-            d = self._dim(p.unit)
-            if p.is_input and d == ONE:
-                d = FREE        # a model's external input of unit "1": a free signal
-            syms.append(p.sym)
-            dims.append(d)
-        for name, sym in ctx.derivative.items():
-            syms.append(sym)
-            dims.append(_der(_of(name, by_name, ctx)))
-        syms.append(ctx.time)
-        dims.append(SECOND)
-        # the variables' column is stacked once per model (shared with other passes)
-        self.vector = ca.vertcat(flat.stack_variables(), *syms)
+        physical = flat.physical_owners
+        # one dimension per distinct unit, mapped over the variables in C
+        variables = list(flat.variables.values())
+        units = [v.unit for v in variables]
+        dim_of = {u: self._dim(u) for u in dict.fromkeys(units)}
+        dims = list(map(dim_of.__getitem__, units))
+        # a dimensionless signal input/output, or variable of a component without
+        # physical ports, is a free signal
+        for u, d in dim_of.items():
+            if d != ONE:
+                continue
+            for k in [k for k, unit in enumerate(units) if unit == u]:
+                v = variables[k]
+                if v.kind == "input" or v.kind == "output" or \
+                        (v.kind == "variable" and v.owner not in physical):
+                    dims[k] = FREE
         self.dims = dims
+        # the variables' column is stacked once per model (shared with other passes)
+        self.vector = flat.stack_variables()
+        self._parameters: dict | None = None
 
     def _dim(self, unit: str):
         d = unit_dimension(unit)
@@ -381,12 +388,31 @@ class _Symbols:
         self.declared.setdefault(d, unit)
         return d
 
+    def free(self, f: ca.Function) -> list:
+        """The dimension of each free symbol of ``f`` (in the order of ``free_sx``)."""
+        return [self.of(s.name()) for s in f.free_sx()]
 
-def _of(name: str, by_name: dict, ctx):
-    if name in by_name:
-        return by_name[name]
-    base = ctx.integral.get(name)      # "der(x)" -> "x"
-    return _der(_of(base, by_name, ctx)) if base is not None else FREE
+    def of(self, name: str):
+        """The dimension of the symbol ``name``: a parameter, a variable, a derivative,
+        time; a symbol of none of these is a free signal."""
+        flat = self.flat
+        ctx = flat.context
+        if name == ctx.time.name():
+            return SECOND
+        if self._parameters is None:
+            self._parameters = {p.sym.name(): p for p in flat.parameters.values()}
+        p = self._parameters.get(name)
+        if p is not None:
+            d = self._dim(p.unit)
+            # a model's external input of unit "1": a free signal
+            return FREE if p.is_input and d == ONE else d
+        v = flat.variables.get(name)
+        if v is not None:           # not met: the variables are the walk's input
+            d = self._dim(v.unit)
+            return FREE if d == ONE and (v.kind in ("input", "output") or (
+                v.kind == "variable" and v.owner not in flat.physical_owners)) else d
+        base = ctx.integral.get(name)      # "der(x)" -> "x"
+        return _der(self.of(base)) if base is not None else FREE
 
 
 def _der(d):
@@ -432,7 +458,8 @@ def dimension_problems(flat, model=None) -> list[str]:
     eqs = [eq for eq in flat.equations if _checked(eq)]
     rows = [eq.residual for eq in eqs]
     extra, extra_origins = _event_rows(flat)
-    dims = infer(_function(rows + extra, symbols.vector), symbols.dims)
+    f = _function(rows + extra, symbols.vector)
+    dims = infer(f, symbols.dims, symbols.free(f))
     failing = [k for k, d in enumerate(dims) if type(d) is tuple]
     if not failing:
         return []
@@ -445,7 +472,8 @@ def dimension_problems(flat, model=None) -> list[str]:
         pairs = []
         for k in sided:
             pairs += [eqs[k].origin.lhs, eqs[k].origin.rhs]
-        both = infer(_function(pairs, symbols.vector), symbols.dims)
+        g = _function(pairs, symbols.vector)
+        both = infer(g, symbols.dims, symbols.free(g))
         sides = {k: (both[2 * j], both[2 * j + 1]) for j, k in enumerate(sided)}
     for k in failing:
         if k < len(eqs):

@@ -65,46 +65,65 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     variables read through alias elimination (a variable removed by it is a scaled
     representative or a constant): a model variable the sum of itself, a variable of a
     folded subsystem port (:mod:`mechatron.compiler.folding`) that of its terms, logged
-    where its port is declared."""
+    where its port is declared.
+
+    The rows of the model's variables come from alias elimination's arrays for all of
+    them at once (`AliasResult.representative`, `AliasResult.scale`); only the folded
+    variables, placed between them, are read term by term."""
     variables = flat.variables
-    index = {n: k for k, n in enumerate(variables)}
-    eliminated = alias.eliminated
-    names, units, docs = [], [], []
-    rows, cols, vals = [], [], []
-    constant: list[float] = []
-
-    def add(name, unit, doc, terms) -> None:
-        r = len(names)
-        names.append(name)
-        units.append(unit)
-        docs.append(doc)
-        offset = 0.0
-        entries: dict[int, float] = {}      # terms of one representative add up
-        for n, c in terms:
-            rep, k = eliminated.get(n, (n, 1.0))
-            if rep is None:
-                offset += c * k
-            else:
-                j = index[rep]
-                entries[j] = entries.get(j, 0.0) + c * k
-        rows.extend([r] * len(entries))
-        cols.extend(entries)
-        vals.extend(entries.values())
-        constant.append(offset)
-
+    n = len(variables)
+    names = list(variables)
+    units = [v.unit for v in variables.values()]
+    docs = [v.doc for v in variables.values()]
+    if alias.representative is not None:
+        rep, scale = alias.representative, alias.scale
+    else:
+        rep, scale = np.arange(n), np.ones(n)
     folded = sorted(flat.folded_variables(), key=lambda f: f[3])
-    k = 0
-    for j, (n, var) in enumerate(variables.items()):
-        while k < len(folded) and folded[k][3] <= j:
-            add(*folded[k][:3], folded[k][4])
-            k += 1
-        add(n, var.unit, var.doc, ((n, 1.0),))
-    for name, unit, doc, _, terms in folded[k:]:
-        add(name, unit, doc, terms)
-    if not names:
+    if not names and not folded:
         return names, units, docs, ca.SX(0, 1)
-    M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), len(variables))
-    column = ca.mtimes(M, flat.stack_variables()) + ca.DM(constant)
+    # row of each model variable: after the folded variables placed before it
+    position = np.array([f[3] for f in folded], dtype=np.intp)
+    var_row = np.arange(n) + np.searchsorted(position, np.arange(n), side="right")
+    kept = rep >= 0
+    rows = var_row[kept].tolist()
+    cols = rep[kept].tolist()
+    vals = scale[kept].tolist()
+    constant = np.zeros(n + len(folded))
+    constant[var_row[~kept]] = scale[~kept]
+    if folded:
+        index = {name: k for k, name in enumerate(names)}
+        out_names, out_units, out_docs, start = [], [], [], 0
+        for k, (name, unit, doc, at, terms) in enumerate(folded):
+            at = min(at, n)
+            out_names += names[start:at]
+            out_units += units[start:at]
+            out_docs += docs[start:at]
+            start = at
+            out_names.append(name)
+            out_units.append(unit)
+            out_docs.append(doc)
+            r = k + at
+            entries: dict[int, float] = {}      # terms of one representative add up
+            for term, c in terms:
+                j = index[term]
+                if rep[j] < 0:
+                    constant[r] += c * scale[j]
+                else:
+                    entries[int(rep[j])] = entries.get(int(rep[j]), 0.0) + \
+                        c * float(scale[j])
+            rows += [r] * len(entries)
+            cols += entries
+            vals += entries.values()
+        names = out_names + names[start:]
+        units = out_units + units[start:]
+        docs = out_docs + docs[start:]
+    M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), n)
+    column = ca.mtimes(M, flat.stack_variables())
+    nonzero = np.flatnonzero(constant)
+    if len(nonzero):         # the constants where there are any (a sparse column)
+        column = column + ca.DM.triplet(nonzero.tolist(), [0] * len(nonzero),
+                                        ca.DM(constant[nonzero].tolist()), len(names), 1)
     return names, units, docs, ca.densify(column)
 
 
@@ -144,38 +163,46 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     ctx = flat.context
     params = list(flat.parameters.values())
     p_syms = [p.sym for p in params]
-    unknown_syms = [flat.variables[n].sym for n in alias.unknowns]
+    p = ca.vertcat(*p_syms) if p_syms else ca.SX(0, 1)
     der_syms = [ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative]
-    residuals = [eq.residual for eq in alias.equations]
-    origins = [eq.origin for eq in alias.equations]
-    owners = [eq.owner for eq in alias.equations]
-    # stacked once for the relation scan and the structural analysis (a vertcat converts
-    # each scalar from Python: about 1 us each)
-    res_vec = ca.vertcat(*residuals) if residuals else None
-    symbols = unknown_syms + der_syms + p_syms + [ctx.time]
-    sym_vec = ca.vertcat(flat.stack_variables(alias.unknowns), *der_syms, *p_syms, ctx.time)
-    scanned, relations = extract_relations(residuals, owners, symbols,
-                                           stacked=(sym_vec, res_vec) if residuals else None)
+    residuals, origins, owners = alias.residuals, alias.origins, alias.owners
+    # stacked once (by alias elimination) for the relation scan and the structural
+    # analysis (a vertcat converts each scalar from Python: about 1 us each)
+    res_vec = alias.stacked
+    scanned, relations = extract_relations(residuals, owners, stacked=res_vec,
+                                           origins=origins)
     # the residuals unchanged (no relation in them): their stack serves the lowering; the
     # lowering's variables are the unknowns, then their derivatives
-    stacked = (res_vec, sym_vec[:len(unknown_syms) + len(der_syms)]) \
+    stacked = (res_vec, ca.vertcat(flat.stack_variables(alias.unknowns), *der_syms)) \
         if residuals and not relations else None
     residuals = scanned
     plan = prepare_events(flat, alias, relations)
     lap("relations")
 
-    syms = {n: flat.variables[n].sym for n in alias.unknowns}
-    start_of = {n: _guess(flat, alias, n) for n in alias.unknowns}   # symbols named by path
-    p_value = {p.sym.name(): p.value for p in params}
+    variables = flat.variables
+    syms = {n: variables[n].sym for n in alias.unknowns}
+    p_value = _OnDemand(lambda: {q.sym.name(): q.value for q in params})
 
     def start_guess(free):
-        return [start_of.get(s.name(), p_value.get(s.name(), 0.0)) for s in free]
+        """Start values of symbols named by path: an unknown's (see `_guess`), a
+        parameter's value, else 0."""
+        out = []
+        for s in free:
+            name = s.name()
+            if name in variables and name not in alias.eliminated:
+                out.append(_guess(flat, alias, name))
+            else:
+                out.append(p_value.get(name, 0.0))
+        return out
 
-    hints = {n: v.hint for n, v in flat.variables.items() if v.hint}
+    # the hints are read only by messages; the declaration order of the unknowns only
+    hints = _OnDemand(lambda: {n: v.hint for n, v in variables.items() if v.hint})
+    order = alias.unknown_index.tolist() if alias.unknown_index is not None else \
+        [i for i, n in enumerate(variables) if n not in alias.eliminated]
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
-                declared={n: i for i, n in enumerate(flat.variables)},
+                declared=dict(zip(alias.unknowns, order)),
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
                 classes=dict(flat.components), physical=flat.physical_owners,
                 parameters=p_syms, stacked=stacked)
@@ -189,9 +216,12 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     bind_pre(plan, flat, alias, list(low.states), shadow)
     ini = _initial_residuals(flat, alias)
     n_ini = len(ini)
-    n_dist = n_ode + n_res
-    # the logged variables ride along as one column, last
-    pile = list(low.ode) + list(low.residuals) + dists + ini + plan.exprs + [out_col]
+    # the derivatives and the residuals ride along as one column each (converted from
+    # Python once), the logged variables as one column, last
+    ode_col = ca.vertcat(*low.ode) if n_ode else ca.SX(0, 1)
+    res_col = ca.vertcat(*low.residuals) if n_res else ca.SX(0, 1)
+    n_dist = 2
+    pile = [ode_col, res_col] + dists + ini + plan.exprs + [out_col]
     if low.assigned:
         _, pile = ca.substitute_inplace(low.assigned, low.assigned_expr, pile, False)
     if plan:   # action right-hand sides: relations read directly, not through modes
@@ -207,8 +237,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         values = [modes[k] if r.op == "sign" else (1 - modes[k]) / 2 if r.op == "initial"
                   else (modes[k] + 1) / 2 for k, r in enumerate(relations)]
         pile = ca.substitute(pile, [r.placeholder for r in relations], values)
-    ode = pile[:n_ode]
-    res = pile[n_ode:n_ode + n_res]
+    ode_col, res_col = pile[0], pile[1]
     dist = pile[n_dist:n_dist + len(dists)]
     ini = pile[n_dist + len(dists):-1]
     out_col = pile[-1]
@@ -219,12 +248,11 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     x = ca.vertcat(*low.state_syms) if low.state_syms else ca.SX(0, 1)
     X = ca.vertcat(x, modes, counters, tlast)
     z = ca.vertcat(*low.alg_syms) if low.alg_syms else ca.SX(0, 1)
-    p = ca.vertcat(*p_syms) if p_syms else ca.SX(0, 1)
     nr = len(relations)
-    xdot = ca.vertcat(*ode, ca.SX.zeros(3 * nr)) if (ode or nr) else ca.SX(0, 1)
+    xdot = ca.vertcat(ode_col, ca.SX.zeros(3 * nr)) if (n_ode or nr) else ca.SX(0, 1)
     args, argn = [t, X, z, p], ["t", "x", "z", "p"]
     f_ode = ca.Function("ode", args, [xdot], argn, ["ode"])
-    f_alg = ca.Function("alg", args, [ca.vertcat(*res) if res else ca.SX(0, 1)], argn,
+    f_alg = ca.Function("alg", args, [res_col], argn,
                         ["alg"])
     f_out = ca.Function("out", args, [out_col], argn,
                         ["y"])
@@ -276,7 +304,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     report = {
         "variables": {"flat": n_vars_flat, "after_alias": len(alias.unknowns),
                       "states": len(low.states), "algebraic": len(low.alg)},
-        "equations": {"flat": n_eqs_flat, "after_alias": len(alias.equations),
+        "equations": {"flat": n_eqs_flat, "after_alias": len(alias.residuals),
                       "after_index_reduction": low.n_equations,
                       "residual": len(low.residuals)},
         "aliases_eliminated": len(alias.eliminated),
@@ -356,12 +384,14 @@ def _state_preference(flat, alias) -> dict[str, float]:
     its alias class, plus one half for a high-priority start value (the coordinates a
     user fixes initially are the ones to integrate). Only nonzero entries."""
     pref: dict[str, float] = {}
-    for n, var in flat.variables.items():
-        level = _STATE_SELECT.get(var.state_select, 0.0)
-        if level:
-            rep = alias.eliminated.get(n, (n, 1.0))[0]
-            if rep is not None:
-                pref[rep] = max(pref.get(rep, level), level)
+    selects = [v.state_select for v in flat.variables.values()]
+    if any(_STATE_SELECT.get(s, 0.0) for s in set(selects)):   # else nothing to read
+        for n, select in zip(flat.variables, selects):
+            level = _STATE_SELECT.get(select, 0.0)
+            if level:
+                rep = alias.eliminated.get(n, (n, 1.0))[0]
+                if rep is not None:
+                    pref[rep] = max(pref.get(rep, level), level)
     for rep, (_, prio, _) in alias.starts.items():
         if prio == "high":
             pref[rep] = pref.get(rep, 0.0) + 0.5

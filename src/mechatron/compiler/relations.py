@@ -40,8 +40,7 @@ class Relation:
 
 
 def extract_relations(residuals: list[ca.SX], owners: list[str],
-                      symbols: list[ca.SX],
-                      stacked: tuple[ca.SX, ca.SX] | None = None
+                      stacked: ca.SX | None = None, origins: list | None = None
                       ) -> tuple[list[ca.SX], list[Relation]]:
     """Replace the relations in ``residuals`` by placeholders.
 
@@ -51,16 +50,26 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
         Scalar expressions.
     owners : list of str
         Component path of each residual.
-    symbols : list of SX
-        Every free symbol the residuals may contain (unknowns, parameters, time).
-    stacked : (SX, SX), optional
-        ``vertcat(*symbols)`` and ``vertcat(*residuals)``, if the caller has them.
+    stacked : SX, optional
+        ``vertcat(*residuals)``, if the caller has it.
+    origins : list, optional
+        The origin of each residual. A residual instantiated from the template of a
+        component class (:mod:`mechatron.compiler.flatten`) whose expression graph holds
+        no relation holds none either (instantiation and alias substitution put
+        expressions in place of symbols, they add no operation): only the others are
+        scanned.
     """
     if not residuals:
         return residuals, []
-    sym_vec, res_vec = stacked if stacked is not None else (ca.vertcat(*symbols),
-                                                             ca.vertcat(*residuals))
-    f = ca.Function("scan", [sym_vec], [res_vec])
+    rows = _candidates(origins) if origins is not None else None
+    if rows is not None and not rows:
+        return residuals, []
+    column = stacked if stacked is not None else ca.vertcat(*residuals)
+    if rows is not None and len(rows) < len(residuals):
+        column = column[rows]
+    else:
+        rows = range(len(residuals))
+    f = ca.Function("scan", [], [column], {"allow_free": True, "live_variables": False})
     n = f.n_instructions()
     ops = list(map(_OP_OF, repeat(f, n), range(n)))
     if _REL_OPS.keys().isdisjoint(ops):
@@ -72,7 +81,7 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
         if op == ca.OP_OUTPUT:
             ins = f.instruction_input(k)
             if flagged_work.get(ins[0]):
-                touched.add(f.instruction_output(k)[1])
+                touched.add(rows[f.instruction_output(k)[1]])
             continue
         if op in (ca.OP_INPUT, ca.OP_CONST, ca.OP_PARAMETER):
             flagged_work[f.instruction_output(k)[0]] = False
@@ -86,6 +95,28 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
     for j in sorted(touched):
         out[j] = _rebuild(residuals[j], owners[j], relations)
     return out, relations
+
+
+def _candidates(origins: list) -> list[int] | None:
+    """The residuals that may hold relations: all but those of class templates without
+    any (read once per template); None if that cannot be told."""
+    free: dict[int, bool] = {}          # template -> holds no relation
+    rows = []
+    for k, origin in enumerate(origins):
+        template = getattr(origin, "template", None)
+        fun = getattr(template, "fun", None)
+        if not isinstance(fun, ca.Function):
+            rows.append(k)
+            continue
+        key = id(template)
+        none = free.get(key)
+        if none is None:
+            m = fun.n_instructions()
+            none = free[key] = _REL_OPS.keys().isdisjoint(map(_OP_OF, repeat(fun, m),
+                                                               range(m)))
+        if not none:
+            rows.append(k)
+    return rows
 
 
 def _placeholder(relations: list[Relation], op: str, d: ca.SX, owner: str,
