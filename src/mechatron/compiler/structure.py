@@ -206,12 +206,14 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # written (equivalent: the reduced forms add equations that stay)
     reduced = {e: reduction.residual(e, res, var_syms) for e in reduction.changed
                if ir.eq_to_diff[e] != -1}
+    restored = False
     for e in reduction.changed:
         if e in reduced:
             res[e] = reduced[e]
             orig[e] = Combined([orig[k] for k in sorted(reduction.reduced[e][1])])
         else:
             ir.adj[e] = list(dict.fromkeys(adj[e]))
+            restored = True
     differentiated = []
     while len(var_syms) < ir.n_var:
         v = len(var_syms)
@@ -279,7 +281,12 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
 
     # -- matching of the non-states, BLT, tearing -----------------------------------------
     allowed = [not s for s in is_state]
-    m = maximum_matching(len(var_syms), adj, allowed=allowed)
+    if differentiated or restored:
+        m = maximum_matching(len(var_syms), adj, allowed=allowed)
+    else:
+        # nothing differentiated: the states are the variables with a derivative, the
+        # incidence is the one index reduction matched, and its matching is this one
+        m = ir.matching
     if m.unmatched_equations or any(m.var_to_eq[v] == -1 for v in range(len(var_syms))
                                     if allowed[v]):
         _raise_structural(name, res, orig, var_names, m, allowed, hints)

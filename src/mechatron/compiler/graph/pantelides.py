@@ -54,7 +54,9 @@ class IndexReduction:
     matching : Matching
         Matching of the highest-derivative equations (``eq_to_diff[e] == -1``) to
         highest-derivative variables (``var_to_diff[v] == -1``); every such equation
-        is matched. Lower-order equations and variables are left unmatched.
+        is matched. Lower-order equations and variables are left unmatched. When no
+        equation is differentiated, it is ``maximum_matching(n_var, adj,
+        allowed=[d == -1 for d in var_to_diff])`` of the given system, pair for pair.
     differentiated : list of tuple of (int, int)
         ``(e, k)`` for each original equation ``e`` differentiated ``k >= 1`` times,
         in increasing order of ``e``.
@@ -136,8 +138,12 @@ def pantelides(n_var: int, adj: Sequence[Sequence[int]], var_to_diff: Sequence[i
     """
     rows = _copy_adjacency(n_var, adj)
     var_to_diff = _checked_var_to_diff(n_var, var_to_diff)
-    _check_nonsingular(n_var, rows, var_to_diff)
     system = _Extension(n_var, rows, var_to_diff)
+    # a matching of every equation onto distinct highest derivatives is one onto
+    # distinct families (each family has one highest derivative): the check can only
+    # fail when the first matching leaves an equation out
+    if UNMATCHED in system.eq_to_var:
+        _check_nonsingular(n_var, rows, var_to_diff)
     n_original = len(rows)
     for k in range(n_original):
         if system.eq_to_diff[k] == UNMATCHED and system.eq_to_var[k] == UNMATCHED:
