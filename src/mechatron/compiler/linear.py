@@ -355,6 +355,8 @@ def _hidden(n: int, elim: LinearElimination, linear, eliminable) -> list[int]:
     reduction must see its reduced form; if not, its dependency is visible in the
     incidence already (e.g. a kinematic loop closed by a ground), and it stays as
     written, with the state selection it had."""
+    if not elim.rows:      # every equation is a pivot: nothing is reduced
+        return []
     rows: list[list[int]] = [[] for _ in linear]
     for e in elim.pivots:
         rows[e] = [v for v in linear[e] if eliminable[v]]
