@@ -12,6 +12,7 @@ and see only integer incidence; this module owns the symbols.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import chain
 
 import casadi as ca
 import numpy as np
@@ -75,7 +76,7 @@ def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity]:
     of the Jacobian it comes from."""
     sp = _pattern(expr, syms)
     ptr, col = sp.get_crs()
-    return [col[ptr[r]:ptr[r + 1]] for r in range(sp.size1())], sp
+    return [col[a:b] for a, b in zip(ptr, ptr[1:])], sp
 
 
 class _Singular(StructuralError):
@@ -186,7 +187,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                                                                 ca.vertcat(*var_syms))
     adj, pattern = _csr(res_vec, var_vec) if res else ([], None)
     # derivative symbols that appear nowhere do not make their variable a state
-    used = set(v for row in adj for v in row)
+    used = set(chain.from_iterable(adj))
     for i, d in enumerate(var_to_diff):
         if d != -1 and d not in used:
             var_to_diff[i] = -1
@@ -232,7 +233,6 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
 
     pref = preference or {}
     n_orig = len(residuals)
-    is_derivative = set(d for d in ir.var_to_diff if d != -1)
     point: dict[str, float] = {}
     assembled: list[bool] = []
 
@@ -241,6 +241,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         on the first call): the Jacobians that choose the states are then evaluated at
         an assembled configuration, not at zeros that may put every link on one line."""
         if pref and not assembled:
+            is_derivative = set(d for d in ir.var_to_diff if d != -1)
             point.update(_assembled(res[:n_orig], adj[:n_orig], var_syms, is_derivative,
                                     start_guess, set(pref)))
             assembled.append(True)
@@ -267,28 +268,27 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                                       [var_names[c] for c in candidates])
         return [candidates[j] for j in chosen]
 
-    priority = [-weight(v) for v in range(len(var_syms))] if pref else None
-    n_unknown = len(unknowns)
-    rank = ([declared.get(n, len(declared) + i) for i, n in enumerate(unknowns)]
-            if declared is not None else list(range(n_unknown)))
-    rank += range(n_unknown, ir.n_var_original)   # derivatives: their root's rank is read
-    dummies = (set(dummy_derivatives(ir, select=select, priority=priority, rank=rank))
-               if differentiated else set())
+    dummies: set[int] = set()
+    if differentiated:
+        priority = [-weight(v) for v in range(len(var_syms))] if pref else None
+        n_unknown = len(unknowns)
+        rank = ([declared.get(n, len(declared) + i) for i, n in enumerate(unknowns)]
+                if declared is not None else list(range(n_unknown)))
+        rank += range(n_unknown, ir.n_var_original)   # derivatives: their root's rank
+        dummies = set(dummy_derivatives(ir, select=select, priority=priority, rank=rank))
     states = [v for v, d in enumerate(var_to_diff) if d != -1 and d not in dummies]
-    is_state = [False] * len(var_syms)
+    allowed = [True] * len(var_syms)
     for v in states:
-        is_state[v] = True
+        allowed[v] = False
 
     # -- matching of the non-states, BLT, tearing -----------------------------------------
-    allowed = [not s for s in is_state]
     if differentiated or restored:
         m = maximum_matching(len(var_syms), adj, allowed=allowed)
     else:
         # nothing differentiated: the states are the variables with a derivative, the
         # incidence is the one index reduction matched, and its matching is this one
         m = ir.matching
-    if m.unmatched_equations or any(m.var_to_eq[v] == -1 for v in range(len(var_syms))
-                                    if allowed[v]):
+    if -1 in m.eq_to_var or any(e == -1 and ok for e, ok in zip(m.var_to_eq, allowed)):
         _raise_structural(name, res, orig, var_names, m, allowed, hints)
     blocks = block_lower_triangular(len(var_syms), adj, m)
     if pref and differentiated:
@@ -297,7 +297,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                 _check_selection(name, res, orig, var_syms, var_names, block, guess)
     else:
         for block in blocks:
-            if 1 < len(block.equations) <= _LOOP_CHECK_MAX:
+            if len(block.equations) > 1 and len(block.equations) <= _LOOP_CHECK_MAX:
                 _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
                             physical or set())
     out = Lowered(states=[var_names[v] for v in states], state_syms=[var_syms[v] for v in states],
@@ -329,17 +329,18 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             e < n_orig and e not in reduced and v < n_given for e, v in singles):
         given = (res_vec, var_vec, reduction.jacobian, pattern)
     bulk = _solve_singles(res, var_syms, singles, given)
+    out.largest_block = max((len(b.equations) for b in blocks), default=0)
+    assign, assign_expr = out.assigned.append, out.assigned_expr.append
     for block in blocks:
         eqs, vs = block.equations, block.variables
-        out.largest_block = max(out.largest_block, len(eqs))
         if len(eqs) == 1:
             e, v = eqs[0], vs[0]
             quick = bulk.get(e)
             if quick is None:
                 quick = _explicit(res[e], var_syms[v])
             if quick is not None:
-                out.assigned.append(var_syms[v])
-                out.assigned_expr.append(quick)
+                assign(var_syms[v])
+                assign_expr(quick)
                 continue
             coef = coefficient(e, v)
             if coef is not None:
