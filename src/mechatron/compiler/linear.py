@@ -204,8 +204,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     for r, c, value in zip(np.asarray(rows)[number].tolist(),
                            np.asarray(cols)[number].tolist(), values[number].tolist()):
         const[r].add(c)
-        if value:
-            linear[r][c] = exact(value)
+        if value:   # exact(value), inline
+            linear[r][c] = int(value) if value.is_integer() else Fraction(value)
     symbolic = np.flatnonzero(~number).tolist()
     atoms: list = []
     if parameters and symbolic:
@@ -226,8 +226,13 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     # the purely linear equations: every unknown in them has a numeric coefficient
     # (Kirchhoff's laws, v = p.v - n.v, v = V(t)); only their combinations cancel
     # exactly, the other terms of c.i == C*der(c.v) are taken as generic
-    pure = [e for e in range(len(res))
-            if not any(eliminable[v] for v in other_terms(e))]
+    pure = []
+    for e, (row, fixed) in enumerate(zip(adj, const)):
+        for v in row:
+            if eliminable[v] and v not in fixed:
+                break
+        else:
+            pure.append(e)
     elim = exact_elimination(linear, eliminable, rows=pure)
     out = Reduction([list(r) for r in adj], const=const, atoms=atoms, jacobian=jac)
     for e, row in elim.rows.items():

@@ -539,8 +539,7 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     n = len(singles)
     if n < 2:
         return {}
-    es = [e for e, _ in singles]
-    vs = [v for _, v in singles]
+    es, vs = (list(a) for a in zip(*singles))
     if given is not None:
         R, V, J, S = given
         E, X = R[es], V[vs]
@@ -576,9 +575,13 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     classes: list[list[int]] = []
     for i in np.flatnonzero(usable).tolist():
         lo, hi = ptr[i], ptr[i + 1]
-        k = 0
-        if lo < hi:
+        if lo == hi:
+            k = 0
+        elif hi - lo == 1:
+            k = 1 if colour[earlier[lo]] == 0 else 0
+        else:
             taken = {colour[j] for j in earlier[lo:hi]}
+            k = 0
             while k in taken:
                 k += 1
         colour[i] = k
@@ -591,8 +594,7 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         # vertcat of the scalars converts each one from Python)
         ex, xs, ds = E[idx], X[idx], d[idx]
         rest = ca.substitute(ex, xs, ca.DM.zeros(len(idx)))
-        for i, sol in zip(idx, ca.vertsplit(-rest / ds)):
-            out[singles[i][0]] = sol
+        out.update(zip([es[i] for i in idx], ca.vertsplit(-rest / ds)))
     return out
 
 
