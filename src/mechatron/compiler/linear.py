@@ -71,7 +71,8 @@ class Reduction:
     ----------
     adj : list of list of int
         Incidence for index reduction: the given one with every *changed* equation
-        replaced by the incidence of its reduced form.
+        replaced by the incidence of its reduced form (the other rows are the given
+        lists themselves).
     reduced : dict of int to tuple
         For each equation that the exact elimination reduced (a combination of the
         purely linear equations that leaves no unknown in their linear part):
@@ -193,7 +194,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     """
     n = len(var_syms)
     if not res:
-        return Reduction([list(r) for r in adj])
+        return Reduction(list(adj))
     jac = sparse_jacobian(*(stacked if stacked is not None else
                             (ca.vertcat(*res), ca.vertcat(*var_syms))), sparsity)
     rows, cols = jac.sparsity().get_triplet()
@@ -234,7 +235,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         else:
             pure.append(e)
     elim = exact_elimination(linear, eliminable, rows=pure)
-    out = Reduction([list(r) for r in adj], const=const, atoms=atoms, jacobian=jac)
+    out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac)
     for e, row in elim.rows.items():
         comb = elim.combination(e) if elim.changed(e) else {e: 1}
         inc = dict.fromkeys(sorted(row))

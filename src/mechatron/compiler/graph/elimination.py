@@ -62,7 +62,8 @@ class LinearElimination:
         as given.
     rows : dict of int to dict
         For every other equation ``e`` taking part: its reduced linear part
-        ``{column: coefficient}`` (no eliminable column left, exact zeros dropped).
+        ``{column: coefficient}`` (no eliminable column left, exact zeros dropped; the
+        given mapping itself when the elimination left it as it was).
     updates : dict of int to list
         ``updates[e]``: the ``(pivot equation, multiplier, scale)`` steps applied to
         equation ``e``, in order: ``e := scale * e - multiplier * pivot``, each pivot
@@ -170,8 +171,14 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     updates: dict[int, list[tuple[int, Coefficient]]] = {}
     col_rows: dict[int, dict[int, None]] = {}
     count: dict[int, int] = {}          # eliminable columns left in each active row
+    given: set[int] = set()             # rows still the caller's mappings (not changed)
     for e in rows:
-        work[e] = row = {v: a for v, a in linear[e].items() if a}
+        row = linear[e]
+        if all(row.values()):
+            given.add(e)
+        else:
+            row = {v: a for v, a in row.items() if a}
+        work[e] = row
         n = 0
         for v in row:
             if ok[v]:
@@ -214,6 +221,9 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         symbolic = isinstance(a, Laurent)
         for f in others:
             frow = work[f]
+            if f in given:          # copied before its first change
+                given.discard(f)
+                frow = work[f] = dict(frow)
             if symbolic:            # fraction-free: f := a * f - frow[v] * e
                 s, m = a, frow[v]
                 for u in frow:
