@@ -323,10 +323,11 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # the given equations and their Jacobian (from `reveal`) serve the one-equation
     # blocks, unless index reduction replaced or added equations among them
     singles = [(b.equations[0], b.variables[0]) for b in blocks if len(b.equations) == 1]
+    es, vs = (list(a) for a in zip(*singles)) if singles else ([], [])
     given = None
-    n_given = var_vec.numel() if res else 0
-    if res and reduction.jacobian is not None and all(
-            e < n_orig and e not in reduced and v < n_given for e, v in singles):
+    if res and reduction.jacobian is not None and (not singles or (
+            max(es) < n_orig and max(vs) < var_vec.numel()
+            and not (reduced and any(e in reduced for e in es)))):
         given = (res_vec, var_vec, reduction.jacobian, pattern)
     bulk = _solve_singles(res, var_syms, singles, given)
     out.largest_block = max((len(b.equations) for b in blocks), default=0)
