@@ -297,7 +297,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                 _check_selection(name, res, orig, var_syms, var_names, block, guess)
     else:
         for block in blocks:
-            if len(block.equations) > 1 and len(block.equations) <= _LOOP_CHECK_MAX:
+            if 1 < len(block.equations) <= _LOOP_CHECK_MAX:
                 _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
                             physical or set())
     out = Lowered(states=[var_names[v] for v in states], state_syms=[var_syms[v] for v in states],

@@ -128,7 +128,7 @@ def check_adjacency(n_var: int, adj: Sequence[Sequence[int]]) -> None:
 
 def checked_entries(n_var: int, adj: Sequence[Sequence[int]]) -> np.ndarray | None:
     """`check_adjacency`, returning the entries of `adj` row after row as one integer
-    array (None when they do not fit in 64 bits: they are out of range then)."""
+    array (None if they do not fit in 64 bits)."""
     if n_var < 0:
         raise ValueError(f"n_var must be >= 0, got {n_var}.")
     total = sum(map(len, adj))
@@ -148,10 +148,12 @@ def checked_entries(n_var: int, adj: Sequence[Sequence[int]]) -> np.ndarray | No
 
 
 def allowed_rows(adj: Sequence[Sequence[int]], ok: list[bool],
-                 flat: np.ndarray) -> list[Sequence[int]]:
+                 flat: np.ndarray | None) -> list[Sequence[int]]:
     """The rows of `adj` with the variables that are not `ok` left out; rows without
     such variables are shared with `adj`, not copied. `flat` is
     ``checked_entries(n_var, adj)``."""
+    if flat is None:
+        return [[v for v in row if ok[v]] for row in adj]
     rows = list(adj)
     mask = np.array(ok, dtype=bool)
     banned = ~mask[flat]
@@ -315,8 +317,8 @@ def _karp_sipser(n_var: int, rows: Sequence[Sequence[int]]) -> tuple[list[int], 
     row). Degrees count the free vertices only. ``O(m)``.
 
     The forced pairs are taken last found, first matched: variables before equations,
-    and of each the one whose degree fell to one most recently (those of degree one
-    at the start in increasing order below them).
+    of each the one whose degree fell to one most recently; those of degree one at the
+    start come after all of these, the highest index first.
     """
     n_eq = len(rows)
     cols = _transpose(n_var, rows)
