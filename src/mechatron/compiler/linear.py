@@ -71,7 +71,8 @@ class Reduction:
     ----------
     adj : list of list of int
         Incidence for index reduction: the given one with every *changed* equation
-        replaced by the incidence of its reduced form.
+        replaced by the incidence of its reduced form (the other rows are the given
+        lists themselves).
     reduced : dict of int to tuple
         For each equation that the exact elimination reduced (a combination of the
         purely linear equations that leaves no unknown in their linear part):
@@ -193,7 +194,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     """
     n = len(var_syms)
     if not res:
-        return Reduction([list(r) for r in adj])
+        return Reduction(list(adj))
     jac = sparse_jacobian(*(stacked if stacked is not None else
                             (ca.vertcat(*res), ca.vertcat(*var_syms))), sparsity)
     rows, cols = jac.sparsity().get_triplet()
@@ -204,8 +205,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     for r, c, value in zip(np.asarray(rows)[number].tolist(),
                            np.asarray(cols)[number].tolist(), values[number].tolist()):
         const[r].add(c)
-        if value:
-            linear[r][c] = exact(value)
+        if value:   # exact(value), inline
+            linear[r][c] = int(value) if value.is_integer() else Fraction(value)
     symbolic = np.flatnonzero(~number).tolist()
     atoms: list = []
     if parameters and symbolic:
@@ -226,10 +227,15 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     # the purely linear equations: every unknown in them has a numeric coefficient
     # (Kirchhoff's laws, v = p.v - n.v, v = V(t)); only their combinations cancel
     # exactly, the other terms of c.i == C*der(c.v) are taken as generic
-    pure = [e for e in range(len(res))
-            if not any(eliminable[v] for v in other_terms(e))]
+    pure = []
+    for e, (row, fixed) in enumerate(zip(adj, const)):
+        for v in row:
+            if eliminable[v] and v not in fixed:
+                break
+        else:
+            pure.append(e)
     elim = exact_elimination(linear, eliminable, rows=pure)
-    out = Reduction([list(r) for r in adj], const=const, atoms=atoms, jacobian=jac)
+    out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac)
     for e, row in elim.rows.items():
         comb = elim.combination(e) if elim.changed(e) else {e: 1}
         inc = dict.fromkeys(sorted(row))
@@ -355,6 +361,8 @@ def _hidden(n: int, elim: LinearElimination, linear, eliminable) -> list[int]:
     reduction must see its reduced form; if not, its dependency is visible in the
     incidence already (e.g. a kinematic loop closed by a ground), and it stays as
     written, with the state selection it had."""
+    if not elim.rows:      # every equation is a pivot: nothing is reduced
+        return []
     rows: list[list[int]] = [[] for _ in linear]
     for e in elim.pivots:
         rows[e] = [v for v in linear[e] if eliminable[v]]

@@ -12,6 +12,7 @@ and see only integer incidence; this module owns the symbols.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import chain
 
 import casadi as ca
 import numpy as np
@@ -75,7 +76,7 @@ def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity]:
     of the Jacobian it comes from."""
     sp = _pattern(expr, syms)
     ptr, col = sp.get_crs()
-    return [col[ptr[r]:ptr[r + 1]] for r in range(sp.size1())], sp
+    return [col[a:b] for a, b in zip(ptr, ptr[1:])], sp
 
 
 class _Singular(StructuralError):
@@ -186,7 +187,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                                                                 ca.vertcat(*var_syms))
     adj, pattern = _csr(res_vec, var_vec) if res else ([], None)
     # derivative symbols that appear nowhere do not make their variable a state
-    used = set(v for row in adj for v in row)
+    used = set(chain.from_iterable(adj))
     for i, d in enumerate(var_to_diff):
         if d != -1 and d not in used:
             var_to_diff[i] = -1
@@ -206,12 +207,14 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # written (equivalent: the reduced forms add equations that stay)
     reduced = {e: reduction.residual(e, res, var_syms) for e in reduction.changed
                if ir.eq_to_diff[e] != -1}
+    restored = False
     for e in reduction.changed:
         if e in reduced:
             res[e] = reduced[e]
             orig[e] = Combined([orig[k] for k in sorted(reduction.reduced[e][1])])
         else:
             ir.adj[e] = list(dict.fromkeys(adj[e]))
+            restored = True
     differentiated = []
     while len(var_syms) < ir.n_var:
         v = len(var_syms)
@@ -230,7 +233,6 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
 
     pref = preference or {}
     n_orig = len(residuals)
-    is_derivative = set(d for d in ir.var_to_diff if d != -1)
     point: dict[str, float] = {}
     assembled: list[bool] = []
 
@@ -239,6 +241,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         on the first call): the Jacobians that choose the states are then evaluated at
         an assembled configuration, not at zeros that may put every link on one line."""
         if pref and not assembled:
+            is_derivative = set(d for d in ir.var_to_diff if d != -1)
             point.update(_assembled(res[:n_orig], adj[:n_orig], var_syms, is_derivative,
                                     start_guess, set(pref)))
             assembled.append(True)
@@ -265,23 +268,27 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                                       [var_names[c] for c in candidates])
         return [candidates[j] for j in chosen]
 
-    priority = [-weight(v) for v in range(len(var_syms))] if pref else None
-    n_unknown = len(unknowns)
-    rank = ([declared.get(n, len(declared) + i) for i, n in enumerate(unknowns)]
-            if declared is not None else list(range(n_unknown)))
-    rank += range(n_unknown, ir.n_var_original)   # derivatives: their root's rank is read
-    dummies = (set(dummy_derivatives(ir, select=select, priority=priority, rank=rank))
-               if differentiated else set())
+    dummies: set[int] = set()
+    if differentiated:
+        priority = [-weight(v) for v in range(len(var_syms))] if pref else None
+        n_unknown = len(unknowns)
+        rank = ([declared.get(n, len(declared) + i) for i, n in enumerate(unknowns)]
+                if declared is not None else list(range(n_unknown)))
+        rank += range(n_unknown, ir.n_var_original)   # derivatives: their root's rank
+        dummies = set(dummy_derivatives(ir, select=select, priority=priority, rank=rank))
     states = [v for v, d in enumerate(var_to_diff) if d != -1 and d not in dummies]
-    is_state = [False] * len(var_syms)
+    allowed = [True] * len(var_syms)
     for v in states:
-        is_state[v] = True
+        allowed[v] = False
 
     # -- matching of the non-states, BLT, tearing -----------------------------------------
-    allowed = [not s for s in is_state]
-    m = maximum_matching(len(var_syms), adj, allowed=allowed)
-    if m.unmatched_equations or any(m.var_to_eq[v] == -1 for v in range(len(var_syms))
-                                    if allowed[v]):
+    if differentiated or restored:
+        m = maximum_matching(len(var_syms), adj, allowed=allowed)
+    else:
+        # nothing differentiated: the states are the variables with a derivative, the
+        # incidence is the one index reduction matched, and its matching is this one
+        m = ir.matching
+    if -1 in m.eq_to_var or any(e == -1 and ok for e, ok in zip(m.var_to_eq, allowed)):
         _raise_structural(name, res, orig, var_names, m, allowed, hints)
     blocks = block_lower_triangular(len(var_syms), adj, m)
     if pref and differentiated:
@@ -316,23 +323,25 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # the given equations and their Jacobian (from `reveal`) serve the one-equation
     # blocks, unless index reduction replaced or added equations among them
     singles = [(b.equations[0], b.variables[0]) for b in blocks if len(b.equations) == 1]
+    es, vs = (list(a) for a in zip(*singles)) if singles else ([], [])
     given = None
-    n_given = var_vec.numel() if res else 0
-    if res and reduction.jacobian is not None and all(
-            e < n_orig and e not in reduced and v < n_given for e, v in singles):
+    if res and reduction.jacobian is not None and (not singles or (
+            max(es) < n_orig and max(vs) < var_vec.numel()
+            and not (reduced and any(e in reduced for e in es)))):
         given = (res_vec, var_vec, reduction.jacobian, pattern)
     bulk = _solve_singles(res, var_syms, singles, given)
+    out.largest_block = max((len(b.equations) for b in blocks), default=0)
+    assign, assign_expr = out.assigned.append, out.assigned_expr.append
     for block in blocks:
         eqs, vs = block.equations, block.variables
-        out.largest_block = max(out.largest_block, len(eqs))
         if len(eqs) == 1:
             e, v = eqs[0], vs[0]
             quick = bulk.get(e)
             if quick is None:
                 quick = _explicit(res[e], var_syms[v])
             if quick is not None:
-                out.assigned.append(var_syms[v])
-                out.assigned_expr.append(quick)
+                assign(var_syms[v])
+                assign_expr(quick)
                 continue
             coef = coefficient(e, v)
             if coef is not None:
@@ -531,8 +540,7 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     n = len(singles)
     if n < 2:
         return {}
-    es = [e for e, _ in singles]
-    vs = [v for _, v in singles]
+    es, vs = (list(a) for a in zip(*singles))
     if given is not None:
         R, V, J, S = given
         E, X = R[es], V[vs]
@@ -568,9 +576,13 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     classes: list[list[int]] = []
     for i in np.flatnonzero(usable).tolist():
         lo, hi = ptr[i], ptr[i + 1]
-        k = 0
-        if lo < hi:
+        if lo == hi:
+            k = 0
+        elif hi - lo == 1:
+            k = 1 if colour[earlier[lo]] == 0 else 0
+        else:
             taken = {colour[j] for j in earlier[lo:hi]}
+            k = 0
             while k in taken:
                 k += 1
         colour[i] = k
@@ -583,8 +595,7 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         # vertcat of the scalars converts each one from Python)
         ex, xs, ds = E[idx], X[idx], d[idx]
         rest = ca.substitute(ex, xs, ca.DM.zeros(len(idx)))
-        for i, sol in zip(idx, ca.vertsplit(-rest / ds)):
-            out[singles[i][0]] = sol
+        out.update(zip([es[i] for i in idx], ca.vertsplit(-rest / ds)))
     return out
 
 

@@ -111,3 +111,57 @@ def test_random_sparse_systems(seed):
     m = maximum_matching(n_var, adj)
     blocks = block_lower_triangular(n_var, adj, m)
     assert_blt_valid(n_var, adj, m, blocks)
+
+
+def tarjan_by_recursion(n, succ):
+    """Tarjan's algorithm as published (recursive): roots in increasing order,
+    successors in list order, each component sorted when emitted."""
+    index, low, on_stack, stack, out = {}, {}, set(), [], []
+
+    def connect(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in succ[v]:
+            if w not in index:
+                connect(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            out.append(sorted(comp))
+
+    for v in range(n):
+        if v not in index:
+            connect(v)
+    return out
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_tarjan_emits_components_in_the_order_of_the_published_algorithm(seed):
+    """The order of the blocks decides the order of the solved variables: it is the
+    order of Tarjan's algorithm, self-loops, sinks and all."""
+    rng = random.Random(100 + seed)
+    n = rng.randint(1, 40)
+    succ = random_digraph(rng, n, rng.choice([0.02, 0.05, 0.1, 0.2]))
+    assert strongly_connected_components(n, succ) == tarjan_by_recursion(n, succ)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_blt_order_follows_tarjan_on_the_dependency_graph(seed):
+    rng = random.Random(200 + seed)
+    n = rng.randint(1, 30)
+    adj = [sorted(set([e] + rng.sample(range(n), rng.randint(0, 3)))) for e in range(n)]
+    m = maximum_matching(n, adj)
+    succ = [[m.var_to_eq[v] for v in row if m.var_to_eq[v] != -1] for row in adj]
+    expected = tarjan_by_recursion(n, succ)
+    blocks = block_lower_triangular(n, adj, m)
+    assert [b.equations for b in blocks] == expected
+    assert all(b.variables == [m.eq_to_var[e] for e in b.equations] for b in blocks)

@@ -94,3 +94,18 @@ def test_a_long_chain_gives_short_combinations():
 def test_malformed_input_is_refused():
     with pytest.raises(ValueError, match="column 5"):
         exact_elimination([{5: 1}], [True])
+
+
+def test_the_given_equations_are_not_modified():
+    """Rows left as they were may be returned as given; rows that change are copies."""
+    rng = random.Random(11)
+    for _ in range(100):
+        n = rng.randint(3, 9)
+        linear = [{v: rng.choice([-1, 1, 2, 0])
+                   for v in rng.sample(range(n), rng.randint(1, 3))} for _ in range(n + 2)]
+        before = [dict(row) for row in linear]
+        out = exact_elimination(linear, [rng.random() < 0.8 for _ in range(n)])
+        assert linear == before
+        for e, row in out.rows.items():
+            assert all(row.values()), "exact zeros are dropped"
+            assert combined(linear, out.combination(e)) == row

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from mechatron.compiler.graph import Matching, maximum_matching
+from mechatron.compiler.graph.matching import _karp_sipser
 
 
 def assert_valid(matching, n_var, adj, allowed=None):
@@ -159,3 +160,64 @@ def test_allowed_variables_on_a_large_graph():
     m = maximum_matching(n, adj, allowed=allowed)
     assert_valid(m, n, adj, allowed)
     assert_maximum(m, n, [[v for v in row if v in allowed] for row in adj])
+
+
+
+def karp_sipser_by_rule(n_var, rows):
+    """Karp-Sipser by its rule, plainly: a variable whose free degree fell to one is
+    matched (the last such first), else an equation whose free degree fell to one,
+    else the first free equation with its first free variable of least free degree.
+    Degrees count entries in free rows (a repeated entry twice) and are checked
+    against a recount at every step."""
+    n_eq = len(rows)
+    eq_to_var, var_to_eq = [-1] * n_eq, [-1] * n_var
+    var_deg = [sum(row.count(v) for row in rows) for v in range(n_var)]
+    eq_deg = [len(row) for row in rows]
+    lone_vars = [v for v in range(n_var) if var_deg[v] == 1]
+    lone_eqs = [e for e in range(n_eq) if eq_deg[e] == 1]
+    while True:
+        for v in range(n_var):
+            if var_to_eq[v] == -1:
+                assert var_deg[v] == sum(rows[e].count(v) for e in range(n_eq)
+                                         if eq_to_var[e] == -1)
+        if lone_vars:
+            v = lone_vars.pop()
+            if var_deg[v] != 1 or var_to_eq[v] != -1:
+                continue
+            e = min(e for e in range(n_eq) if eq_to_var[e] == -1 and v in rows[e])
+        elif lone_eqs:
+            e = lone_eqs.pop()
+            if eq_deg[e] != 1 or eq_to_var[e] != -1:
+                continue
+            v = next(v for v in rows[e] if var_to_eq[v] == -1)
+        else:
+            free = [e for e in range(n_eq) if eq_to_var[e] == -1 and eq_deg[e]]
+            if not free:
+                return eq_to_var, var_to_eq
+            e = free[0]
+            v = min((u for u in rows[e] if var_to_eq[u] == -1), key=lambda u: var_deg[u])
+        eq_to_var[e], var_to_eq[v] = v, e
+        for u in rows[e]:
+            if var_to_eq[u] == -1:
+                var_deg[u] -= 1
+                if var_deg[u] == 1:
+                    lone_vars.append(u)
+        for f in range(n_eq):
+            for _ in range(rows[f].count(v) if eq_to_var[f] == -1 else 0):
+                eq_deg[f] -= 1
+                if eq_deg[f] == 1:
+                    lone_eqs.append(f)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_karp_sipser_start_follows_its_rule(seed):
+    """The start that decides which maximum matching is returned (and so which
+    equation the compiler solves for which variable) picks its pairs by the rule."""
+    rng = random.Random(seed)
+    n_eq, n_var = rng.randint(1, 30), rng.randint(1, 30)
+    rows = [[rng.randrange(n_var) for _ in range(rng.randint(0, 4))] for _ in range(n_eq)]
+    if seed % 3 == 0:    # no repeated entries, as the compiler gives them
+        rows = [list(dict.fromkeys(row)) for row in rows]
+    eq_to_var, var_to_eq = _karp_sipser(n_var, rows)
+    assert (eq_to_var, var_to_eq) == karp_sipser_by_rule(n_var, rows)
+    assert_valid(Matching(eq_to_var, var_to_eq), n_var, rows)

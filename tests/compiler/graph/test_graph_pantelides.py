@@ -5,7 +5,7 @@ import random
 
 import pytest
 
-from mechatron.compiler.graph import pantelides
+from mechatron.compiler.graph import maximum_matching, pantelides
 from mechatron.errors import StructuralError
 
 
@@ -172,3 +172,37 @@ def test_shuffled_chain_of_inertias(seed):
     check_index_reduction(ir, n_var, adj)
     coupling = sorted(order.index(n + k) for k in range(n - 1))
     assert ir.differentiated == [(e, 1) for e in coupling]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_without_differentiation_the_matching_is_the_maximum_matching(seed):
+    """The compiler reuses this matching as its own when nothing is differentiated:
+    it must be `maximum_matching` onto the highest derivatives, pair for pair. Rows
+    with repeated or unordered entries are matched as their deduplicated copies."""
+    rng = random.Random(seed)
+    n = rng.randint(3, 40)
+    n_state = rng.randint(0, n // 3)
+    # x_k with der(x_k) for k < n_state, then algebraic variables
+    n_var = n + n_state
+    links = [n + k for k in range(n_state)] + [-1] * (n - n_state) + [-1] * n_state
+    highest = [d == -1 for d in links]
+    adj = []
+    for e in range(n - n_state):      # square in the highest derivatives, matchable
+        unknowns = [v for v in range(n_var) if highest[v]]
+        row = [unknowns[e]] + rng.sample(range(n_var), rng.randint(0, 3))
+        rng.shuffle(row)
+        adj.append(row + row[:rng.randint(0, 1)])     # sometimes an entry twice
+    ir = pantelides(n_var, adj, links)
+    check_index_reduction(ir, n_var, adj)
+    if ir.differentiated:
+        pytest.skip("this draw needs index reduction")
+    expected = maximum_matching(n_var, [list(dict.fromkeys(r)) for r in adj],
+                                allowed=highest)
+    assert ir.matching == expected
+
+
+def test_singular_system_is_refused_with_a_matching_onto_highest_derivatives():
+    """The family check runs when the first matching leaves an equation out: here x
+    and der(x) are one family, matched by two equations."""
+    with pytest.raises(StructuralError, match=r"equations \[0, 1\] involve only 1 "):
+        pantelides(2, [[0, 1], [1, 0]], [1, -1])

@@ -62,9 +62,14 @@ def strongly_connected_components(n: int, succ: Sequence[Sequence[int]]) -> list
     low = [0] * n
     stack: list[int] = []
     components: list[list[int]] = []
+    emit = components.append
     counter = 0
     for start in range(n):
         if index[start] != UNMATCHED:
+            continue
+        if not succ[start]:       # a node without successors is a component at once
+            index[start] = done
+            emit([start])
             continue
         index[start] = low[start] = counter
         counter += 1
@@ -75,11 +80,16 @@ def strongly_connected_components(n: int, succ: Sequence[Sequence[int]]) -> list
             u = path[-1]
             for w in edges[-1]:
                 if index[w] == UNMATCHED:
+                    out = succ[w]
+                    if not out:   # as if entered and left at once: its own component
+                        index[w] = done
+                        emit([w])
+                        continue
                     index[w] = low[w] = counter
                     counter += 1
                     stack.append(w)
                     path.append(w)
-                    edges.append(iter(succ[w]))
+                    edges.append(iter(out))
                     break
                 if index[w] < low[u]:
                     low[u] = index[w]
@@ -93,9 +103,9 @@ def strongly_connected_components(n: int, succ: Sequence[Sequence[int]]) -> list
                 if stack[-1] == u:  # the common case of a single node
                     stack.pop()
                     index[u] = done
-                    components.append([u])
+                    emit([u])
                 else:
-                    components.append(_pop_component(stack, index, u, done))
+                    emit(_pop_component(stack, index, u, done))
     return components
 
 
@@ -129,10 +139,11 @@ def block_lower_triangular(n_var: int, adj: Sequence[Sequence[int]],
     if len(eq_to_var) != len(adj) or len(var_to_eq) != n_var:
         raise ValueError(f"matching has sizes ({len(eq_to_var)}, {len(var_to_eq)}), "
                          f"expected ({len(adj)}, {n_var}).")
-    succ = [[var_to_eq[v] for v in row if var_to_eq[v] != UNMATCHED]
+    # an equation's own variable (a loop onto itself) changes no component
+    succ = [[f for v in row if (f := var_to_eq[v]) != UNMATCHED and f != e]
             if eq_to_var[e] != UNMATCHED else [] for e, row in enumerate(adj)]
     partner = eq_to_var.__getitem__
-    return [Block(eqs, list(map(partner, eqs)))
+    return [Block(eqs, [eq_to_var[eqs[0]]] if len(eqs) == 1 else list(map(partner, eqs)))
             for eqs in strongly_connected_components(len(adj), succ)
             if eq_to_var[eqs[0]] != UNMATCHED]
 

@@ -33,7 +33,10 @@ import heapq
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from itertools import chain
 from numbers import Rational
+
+import numpy as np
 
 from mechatron.compiler.graph.polynomial import Laurent
 
@@ -59,7 +62,8 @@ class LinearElimination:
         as given.
     rows : dict of int to dict
         For every other equation ``e`` taking part: its reduced linear part
-        ``{column: coefficient}`` (no eliminable column left, exact zeros dropped).
+        ``{column: coefficient}`` (no eliminable column left, exact zeros dropped; the
+        given mapping itself when the elimination left it as it was).
     updates : dict of int to list
         ``updates[e]``: the ``(pivot equation, multiplier, scale)`` steps applied to
         equation ``e``, in order: ``e := scale * e - multiplier * pivot``, each pivot
@@ -160,34 +164,39 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     """
     n_var = len(eliminable)
     ok = [bool(x) for x in eliminable]
-    for e, row in enumerate(linear):
-        for v in row:
-            if not 0 <= v < n_var:
-                raise ValueError(f"equation {e} names column {v}, outside 0 .. "
-                                 f"{n_var - 1}.")
+    _check_columns(linear, n_var)
     if rows is None:
         rows = [e for e, row in enumerate(linear) if any(ok[v] for v in row)]
     work: dict[int, dict[int, Coefficient]] = {}
     updates: dict[int, list[tuple[int, Coefficient]]] = {}
     col_rows: dict[int, dict[int, None]] = {}
     count: dict[int, int] = {}          # eliminable columns left in each active row
+    given: set[int] = set()             # rows still the caller's mappings (not changed)
     for e in rows:
-        row = {}
-        for v, a in linear[e].items():
-            if a:
-                row[v] = a
+        row = linear[e]
+        if all(row.values()):
+            given.add(e)
+        else:
+            row = {v: a for v, a in row.items() if a}
         work[e] = row
-        count[e] = 0
+        n = 0
         for v in row:
             if ok[v]:
-                col_rows.setdefault(v, {})[e] = None
-                count[e] += 1
+                col = col_rows.get(v)
+                if col is None:
+                    col_rows[v] = {e: None}
+                else:
+                    col[e] = None
+                n += 1
+        count[e] = n
     pivots: dict[int, int] = {}
     active = dict.fromkeys(rows)
     col_singles = [v for v in sorted(col_rows) if len(col_rows[v]) == 1]
     row_singles = [(0, e) for e in rows if count[e] == 1]   # (updates so far, row)
-    heap = [(len(col_rows[v]), v) for v in col_rows]
-    heapq.heapify(heap)
+    # Markowitz choices come from a heap of (equations in column, column), stale entries
+    # skipped; the columns whose count changed are pushed only when a choice is made
+    heap: list[tuple[int, int]] = []
+    dirty = list(col_rows)
     col_singles.reverse()
 
     def retire(e: int) -> None:
@@ -200,7 +209,7 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
                 if len(col) == 1:
                     col_singles.append(v)
                 if col:
-                    heapq.heappush(heap, (len(col), v))
+                    dirty.append(v)
 
     def pivot(e: int, v: int) -> None:
         pivots[e] = v
@@ -212,6 +221,9 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         symbolic = isinstance(a, Laurent)
         for f in others:
             frow = work[f]
+            if f in given:          # copied before its first change
+                given.discard(f)
+                frow = work[f] = dict(frow)
             if symbolic:            # fraction-free: f := a * f - frow[v] * e
                 s, m = a, frow[v]
                 for u in frow:
@@ -229,7 +241,7 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
                     if not was and ok[u] and u in col_rows:
                         col_rows[u][f] = None
                         count[f] += 1
-                        heapq.heappush(heap, (len(col_rows[u]), u))
+                        dirty.append(u)
                 elif was:
                     del frow[u]
                     if ok[u] and u != v and u in col_rows:
@@ -239,7 +251,7 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
                         if len(col) == 1:
                             col_singles.append(u)
                         if col:
-                            heapq.heappush(heap, (len(col), u))
+                            dirty.append(u)
             count[f] -= 1                  # column v is gone from f
             if count[f] == 1:
                 heapq.heappush(row_singles, (len(updates[f]), f))
@@ -247,9 +259,22 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     while active:
         if col_singles:
             v = col_singles.pop()
-            if v not in col_rows or len(col_rows[v]) != 1:
+            col = col_rows.get(v)
+            if col is None or len(col) != 1:
                 continue
-            pivot(next(iter(col_rows[v])), v)
+            # pivot(e, v) when no other equation holds v: e retires, nothing is updated
+            e = next(iter(col))
+            pivots[e] = v
+            del active[e]
+            del col_rows[v]
+            for u in work[e]:
+                if ok[u] and u in col_rows:
+                    col = col_rows[u]
+                    col.pop(e, None)
+                    if len(col) == 1:
+                        col_singles.append(u)
+                    if col:
+                        dirty.append(u)
             continue
         if row_singles:
             _, e = heapq.heappop(row_singles)
@@ -257,6 +282,14 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
                 continue
             pivot(e, next(v for v in work[e] if ok[v]))
             continue
+        fresh = [(len(col), u) for u in dirty if (col := col_rows.get(u))]
+        dirty.clear()
+        if len(fresh) > len(heap):
+            heap += fresh
+            heapq.heapify(heap)
+        else:
+            for item in fresh:
+                heapq.heappush(heap, item)
         chosen = None
         while heap:
             n, v = heapq.heappop(heap)
@@ -270,6 +303,23 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         pivot(e, chosen)
     reduced = {e: work[e] for e in rows if e not in pivots}
     return LinearElimination(pivots=pivots, rows=reduced, updates=updates)
+
+
+def _check_columns(linear: Sequence[Mapping[int, Rational]], n_var: int) -> None:
+    """Raise `ValueError` for a column outside ``0 .. n_var - 1``."""
+    total = sum(map(len, linear))
+    if total:
+        try:
+            cols = np.fromiter(chain.from_iterable(linear), dtype=np.int64, count=total)
+            if cols.min() >= 0 and cols.max() < n_var:
+                return
+        except (OverflowError, TypeError, ValueError):
+            pass
+    for e, row in enumerate(linear):
+        for v in row:
+            if not 0 <= v < n_var:
+                raise ValueError(f"equation {e} names column {v}, outside 0 .. "
+                                 f"{n_var - 1}.")
 
 
 def _ratio(a: Coefficient, b: Coefficient) -> Coefficient:

@@ -20,6 +20,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence, Set as AbstractSet
 from dataclasses import dataclass
+from itertools import chain
+
+import numpy as np
 
 __all__ = ["UNMATCHED", "Matching", "maximum_matching"]
 
@@ -101,11 +104,10 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
     equations, and iterative depth-first searches augment along vertex-disjoint
     shortest paths. Cost ``O(m sqrt(n))``.
     """
-    check_adjacency(n_var, adj)
+    flat = checked_entries(n_var, adj)
     rows = adj
     if allowed is not None:
-        ok = allowed_mask(n_var, allowed)
-        rows = [[v for v in row if ok[v]] for row in adj]
+        rows = allowed_rows(adj, allowed_mask(n_var, allowed), flat)
     if initial is None:
         eq_to_var = [UNMATCHED] * len(rows)
         var_to_eq = [UNMATCHED] * n_var
@@ -121,15 +123,47 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
 
 def check_adjacency(n_var: int, adj: Sequence[Sequence[int]]) -> None:
     """Raise `ValueError` if `adj` names a variable outside ``0 .. n_var - 1``."""
+    checked_entries(n_var, adj)
+
+
+def checked_entries(n_var: int, adj: Sequence[Sequence[int]]) -> np.ndarray | None:
+    """`check_adjacency`, returning the entries of `adj` row after row as one integer
+    array (None if they do not fit in 64 bits)."""
     if n_var < 0:
         raise ValueError(f"n_var must be >= 0, got {n_var}.")
-    if not any(map(len, adj)):
-        return
-    low = min(map(min, filter(len, adj)))
-    high = max(map(max, filter(len, adj)))
+    total = sum(map(len, adj))
+    flat = None
+    if not total:
+        return np.zeros(0, dtype=np.int64)
+    try:   # the entries in one array: two reductions instead of one per row
+        flat = np.fromiter(chain.from_iterable(adj), dtype=np.int64, count=total)
+        low, high = int(flat.min()), int(flat.max())
+    except OverflowError:
+        low = min(map(min, filter(len, adj)))
+        high = max(map(max, filter(len, adj)))
     if low < 0 or high >= n_var:
         bad = low if low < 0 else high
         raise ValueError(f"adj names variable {bad}, outside 0 .. {n_var - 1}.")
+    return flat
+
+
+def allowed_rows(adj: Sequence[Sequence[int]], ok: list[bool],
+                 flat: np.ndarray | None) -> list[Sequence[int]]:
+    """The rows of `adj` with the variables that are not `ok` left out; rows without
+    such variables are shared with `adj`, not copied. `flat` is
+    ``checked_entries(n_var, adj)``."""
+    if flat is None:
+        return [[v for v in row if ok[v]] for row in adj]
+    rows = list(adj)
+    mask = np.array(ok, dtype=bool)
+    banned = ~mask[flat]
+    if not banned.any():
+        return rows
+    lens = np.fromiter(map(len, adj), dtype=np.int64, count=len(adj))
+    owner = np.repeat(np.arange(len(adj)), lens)
+    for e in np.unique(owner[banned]).tolist():
+        rows[e] = [v for v in adj[e] if ok[v]]
+    return rows
 
 
 def allowed_mask(n_var: int, allowed: Sequence[bool] | AbstractSet[int]
@@ -279,52 +313,75 @@ def _karp_sipser(n_var: int, rows: Sequence[Sequence[int]]) -> tuple[list[int], 
 
     A variable left in a single equation (or an equation left with a single variable)
     is matched there, which no maximum matching regrets; otherwise the next free
-    equation takes its free variable of least remaining degree. Degrees count the
-    free vertices only. ``O(m)``.
+    equation takes its free variable of least remaining degree (the first such in its
+    row). Degrees count the free vertices only. ``O(m)``.
+
+    The forced pairs are taken last found, first matched: variables before equations,
+    of each the one whose degree fell to one most recently; those of degree one at the
+    start come after all of these, the highest index first.
     """
     n_eq = len(rows)
-    cols: list[list[int]] = [[] for _ in range(n_var)]
-    for e, row in enumerate(rows):
-        for v in row:
-            cols[v].append(e)
-    eq_deg = [len(row) for row in rows]
-    var_deg = [len(col) for col in cols]
+    cols = _transpose(n_var, rows)
+    eq_deg = list(map(len, rows))
+    var_deg = list(map(len, cols))
     eq_to_var = [UNMATCHED] * n_eq
     var_to_eq = [UNMATCHED] * n_var
     lone_vars = [v for v in range(n_var) if var_deg[v] == 1]
     lone_eqs = [e for e in range(n_eq) if eq_deg[e] == 1]
+    pop_var, push_var = lone_vars.pop, lone_vars.append
+    pop_eq, push_eq = lone_eqs.pop, lone_eqs.append
     scan = 0
     while True:
         if lone_vars:
-            v = lone_vars.pop()
+            v = pop_var()
             if var_deg[v] != 1 or var_to_eq[v] != UNMATCHED:
                 continue
-            e = next(e for e in cols[v] if eq_to_var[e] == UNMATCHED)
+            for e in cols[v]:
+                if eq_to_var[e] == UNMATCHED:
+                    break
         elif lone_eqs:
-            e = lone_eqs.pop()
+            e = pop_eq()
             if eq_deg[e] != 1 or eq_to_var[e] != UNMATCHED:
                 continue
-            v = next(v for v in rows[e] if var_to_eq[v] == UNMATCHED)
+            row = rows[e]
+            for v in row:
+                if var_to_eq[v] == UNMATCHED:
+                    break
         else:
             while scan < n_eq and (eq_to_var[scan] != UNMATCHED or eq_deg[scan] == 0):
                 scan += 1
             if scan == n_eq:
                 return eq_to_var, var_to_eq
             e = scan
-            v = min((u for u in rows[e] if var_to_eq[u] == UNMATCHED),
-                    key=var_deg.__getitem__)
+            row = rows[e]
+            v, least = UNMATCHED, DEAD          # the first free variable of least degree
+            for u in row:
+                if var_to_eq[u] == UNMATCHED and var_deg[u] < least:
+                    v, least = u, var_deg[u]
         eq_to_var[e] = v
         var_to_eq[v] = e
         for u in rows[e]:
             if var_to_eq[u] == UNMATCHED:
-                var_deg[u] -= 1
-                if var_deg[u] == 1:
-                    lone_vars.append(u)
+                d = var_deg[u] - 1
+                var_deg[u] = d
+                if d == 1:
+                    push_var(u)
         for f in cols[v]:
             if eq_to_var[f] == UNMATCHED:
-                eq_deg[f] -= 1
-                if eq_deg[f] == 1:
-                    lone_eqs.append(f)
+                d = eq_deg[f] - 1
+                eq_deg[f] = d
+                if d == 1:
+                    push_eq(f)
+
+
+def _transpose(n_var: int, rows: Sequence[Sequence[int]]) -> list[list[int]]:
+    """``cols[v]``: the equations whose rows hold ``v``, in increasing order (once per
+    occurrence)."""
+    cols: list[list[int]] = [[] for _ in range(n_var)]
+    for e, row in enumerate(rows):
+        for v in row:
+            cols[v].append(e)
+    return cols
 
 
 def _hopcroft_karp(rows: Sequence[Sequence[int]], eq_to_var: list[int],

@@ -25,10 +25,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from mechatron.errors import StructuralError
 
-from .matching import (UNMATCHED, Matching, augment_from, check_adjacency,
-                       maximum_matching)
+from .matching import UNMATCHED, Matching, augment_from, checked_entries, maximum_matching
 
 __all__ = ["IndexReduction", "pantelides", "derivative_chains"]
 
@@ -54,7 +55,9 @@ class IndexReduction:
     matching : Matching
         Matching of the highest-derivative equations (``eq_to_diff[e] == -1``) to
         highest-derivative variables (``var_to_diff[v] == -1``); every such equation
-        is matched. Lower-order equations and variables are left unmatched.
+        is matched. Lower-order equations and variables are left unmatched. When no
+        equation is differentiated, it is ``maximum_matching(n_var, adj,
+        allowed=[d == -1 for d in var_to_diff])`` of the given system, pair for pair.
     differentiated : list of tuple of (int, int)
         ``(e, k)`` for each original equation ``e`` differentiated ``k >= 1`` times,
         in increasing order of ``e``.
@@ -136,8 +139,12 @@ def pantelides(n_var: int, adj: Sequence[Sequence[int]], var_to_diff: Sequence[i
     """
     rows = _copy_adjacency(n_var, adj)
     var_to_diff = _checked_var_to_diff(n_var, var_to_diff)
-    _check_nonsingular(n_var, rows, var_to_diff)
     system = _Extension(n_var, rows, var_to_diff)
+    # a matching of every equation onto distinct highest derivatives is one onto
+    # distinct families (each family has one highest derivative): the check can only
+    # fail when the first matching leaves an equation out
+    if UNMATCHED in system.eq_to_var:
+        _check_nonsingular(n_var, rows, var_to_diff)
     n_original = len(rows)
     for k in range(n_original):
         if system.eq_to_diff[k] == UNMATCHED and system.eq_to_var[k] == UNMATCHED:
@@ -291,8 +298,22 @@ def _inverse(links: Sequence[int]) -> list[int]:
 
 def _copy_adjacency(n_var: int, adj: Sequence[Sequence[int]]) -> list[list[int]]:
     """Validated copy of `adj`, each row without repeated variables."""
-    check_adjacency(n_var, adj)
-    return [list(dict.fromkeys(int(v) for v in row)) for row in adj]
+    flat = checked_entries(n_var, adj)
+    if flat is None:
+        return [list(dict.fromkeys(int(v) for v in row)) for row in adj]
+    lens = np.fromiter(map(len, adj), dtype=np.int64, count=len(adj))
+    ptr = np.concatenate([np.zeros(1, dtype=np.int64), np.cumsum(lens)])
+    values = flat.tolist()
+    rows = [values[a:b] for a, b in zip(ptr[:-1].tolist(), ptr[1:].tolist())]
+    # a row whose entries increase repeats none; the others are deduplicated
+    falls = np.diff(flat) <= 0
+    starts = ptr[1:-1]
+    falls[starts[(starts > 0) & (starts < flat.size)] - 1] = False   # row boundaries
+    if falls.any():
+        owner = np.repeat(np.arange(len(adj)), lens)
+        for e in np.unique(owner[:-1][falls]).tolist():
+            rows[e] = list(dict.fromkeys(rows[e]))
+    return rows
 
 
 def _checked_var_to_diff(n_var: int, var_to_diff: Sequence[int]) -> list[int]:
