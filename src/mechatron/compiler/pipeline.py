@@ -222,8 +222,8 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     res_col = ca.vertcat(*low.residuals) if n_res else ca.SX(0, 1)
     n_dist = 2
     pile = [ode_col, res_col] + dists + ini + plan.exprs + [out_col]
-    if low.assigned:
-        _, pile = ca.substitute_inplace(low.assigned, low.assigned_expr, pile, False)
+    if low.assigned.numel():
+        _, pile = ca.substitute_inplace([low.assigned], [low.assigned_expr], pile, False)
     if plan:   # action right-hand sides: relations read directly, not through modes
         n_act = len(plan.exprs)
         plan.exprs = direct_relations(pile[len(pile) - 1 - n_act:-1], relations,

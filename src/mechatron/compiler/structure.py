@@ -36,8 +36,8 @@ class Lowered:
     alg_syms: list[ca.SX]
     ode: list[ca.SX]
     residuals: list[ca.SX]
-    assigned: list[ca.SX]            # symbols of explicitly solved unknowns, in order
-    assigned_expr: list[ca.SX]       # their expressions (earlier ones may appear)
+    assigned: ca.SX                  # symbols of explicitly solved unknowns, in order
+    assigned_expr: ca.SX             # their expressions (earlier ones may appear)
     differentiated: list[str] = field(default_factory=list)
     n_blocks: int = 0
     largest_block: int = 0
@@ -301,7 +301,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                 _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
                             physical or set())
     out = Lowered(states=[var_names[v] for v in states], state_syms=[var_syms[v] for v in states],
-                  alg=[], alg_syms=[], ode=[], residuals=[], assigned=[], assigned_expr=[],
+                  alg=[], alg_syms=[], ode=[], residuals=[], assigned=ca.SX(0, 1),
+                  assigned_expr=ca.SX(0, 1),
                   differentiated=differentiated, n_blocks=len(blocks),
                   n_equations=len(res), n_unknowns=sum(allowed))
     coef_cache: dict[tuple[int, int], ca.SX | None] = {}
@@ -329,31 +330,46 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             max(es) < n_orig and max(vs) < var_vec.numel()
             and not (reduced and any(e in reduced for e in es)))):
         given = (res_vec, var_vec, reduction.jacobian, pattern)
-    bulk = _solve_singles(res, var_syms, singles, given)
+    bulk_x, bulk_expr, bulk_at = _solve_singles(res, var_syms, singles, given)
     out.largest_block = max((len(b.equations) for b in blocks), default=0)
-    assign, assign_expr = out.assigned.append, out.assigned_expr.append
+    # the assignments in block order: the bulk solutions stay stacked (an index into
+    # them), the others are scalars (-1 - their index); one gather orders them at the end
+    order: list[int] = []
+    syms: list[ca.SX] = []
+    exprs: list[ca.SX] = []
+
+    def assign(sym: ca.SX, expr: ca.SX) -> None:
+        order.append(-1 - len(syms))
+        syms.append(sym)
+        exprs.append(expr)
+
     for block in blocks:
         eqs, vs = block.equations, block.variables
         if len(eqs) == 1:
             e, v = eqs[0], vs[0]
-            quick = bulk.get(e)
-            if quick is None:
-                quick = _explicit(res[e], var_syms[v])
+            k = bulk_at.get(e)
+            if k is not None:
+                order.append(k)
+                continue
+            quick = _explicit(res[e], var_syms[v])
             if quick is not None:
-                assign(var_syms[v])
-                assign_expr(quick)
+                assign(var_syms[v], quick)
                 continue
             coef = coefficient(e, v)
             if coef is not None:
-                out.assigned.append(var_syms[v])
-                out.assigned_expr.append(_solve_linear(res[e], var_syms[v], coef))
+                assign(var_syms[v], _solve_linear(res[e], var_syms[v], coef))
             else:
                 out.alg.append(var_names[v])
                 out.alg_syms.append(var_syms[v])
                 out.residuals.append(res[e])
             continue
-        _solve_block(out, eqs, vs, adj, res, var_syms, var_names, coefficient,
+        _solve_block(out, assign, eqs, vs, adj, res, var_syms, var_names, coefficient,
                      unknown_names)
+    if order:
+        n_bulk = bulk_x.numel()
+        at = [k if k >= 0 else n_bulk - 1 - k for k in order]
+        out.assigned = ca.vertcat(bulk_x, *syms)[at]
+        out.assigned_expr = ca.vertcat(bulk_expr, *exprs)[at]
     for v in states:
         out.ode.append(var_syms[var_to_diff[v]])
     return out
@@ -522,7 +538,7 @@ def _is_symbol(expr: ca.SX, name: str) -> bool:
 
 def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
                    singles: list[tuple[int, int]],
-                   given: tuple | None = None) -> dict[int, ca.SX]:
+                   given: tuple | None = None) -> tuple[ca.SX, ca.SX, dict[int, int]]:
     """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
     them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
     where ``J = de/dx`` is free of ``x`` and not 0.
@@ -531,15 +547,16 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     only, not the variables of other blocks that appear in ``e``: the blocks are
     coloured so that no equation holds the variable of another block of its colour
     (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
-    takes one substitution. Returns ``{e: expression of x}``; the others (not linear
-    in their variable) are left to the equation-by-equation path.
+    takes one substitution. Returns ``(x, expr, at)``: the solved variables and their
+    expressions stacked (by colour), and ``{e: row of x}``; the others (not linear in
+    their variable) are left to the equation-by-equation path.
 
     ``given = (R, V, J, S)``: the residuals and variables stacked, the Jacobian of R in
     V and its sparsity; each block's equation is then a row of R, its variable a row of
     V, and ``J`` and ``S`` are read instead of computed again."""
     n = len(singles)
     if n < 2:
-        return {}
+        return ca.SX(0, 1), ca.SX(0, 1), {}
     es, vs = (list(a) for a in zip(*singles))
     if given is not None:
         R, V, J, S = given
@@ -589,14 +606,19 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         if k == len(classes):
             classes.append([])
         classes[k].append(i)
-    out: dict[int, ca.SX] = {}
+    xs_all, sols = [], []
     for idx in classes:
         # slices of the stacked vectors (indexing by a list of ints stays in C++; a
         # vertcat of the scalars converts each one from Python)
         ex, xs, ds = E[idx], X[idx], d[idx]
         rest = ca.substitute(ex, xs, ca.DM.zeros(len(idx)))
-        out.update(zip([es[i] for i in idx], ca.vertsplit(-rest / ds)))
-    return out
+        xs_all.append(xs)
+        sols.append(-rest / ds)
+    solved = [i for idx in classes for i in idx]
+    at = {es[i]: k for k, i in enumerate(solved)}
+    if not solved:
+        return ca.SX(0, 1), ca.SX(0, 1), {}
+    return ca.vertcat(*xs_all), ca.vertcat(*sols), at
 
 
 def _explicit(r: ca.SX, x: ca.SX):
@@ -637,8 +659,8 @@ class _OnFirstUse:
         return item in self._set
 
 
-def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, coefficient,
-                 unknown_names) -> None:
+def _solve_block(out: Lowered, assign, eqs, vs, adj, res, var_syms, var_names,
+                 coefficient, unknown_names) -> None:
     # the sequence divides by its coefficients: only those free of unknowns are safe (a
     # coefficient such as sin(q) of a rigid link vanishes in some configurations and
     # would turn a nonsingular loop into 0/0); the loop's linear part is then solved by
@@ -662,15 +684,14 @@ def _solve_block(out: Lowered, eqs, vs, adj, res, var_syms, var_names, coefficie
         b = ca.substitute(rvec, zvec, ca.DM.zeros(zvec.shape))
         sol = -ca.solve(a, b) if len(tv) > 1 else -b / a
         for i, z in enumerate(tv):
-            out.assigned.append(z)
-            out.assigned_expr.append(sol[i])
+            assign(z, sol[i])
     else:
         for v in t.tearing_vars:
             out.alg.append(var_names[v])
             out.alg_syms.append(var_syms[v])
         out.residuals.extend(resid)
-    out.assigned.extend(seq_syms)
-    out.assigned_expr.extend(seq_expr)
+    for sym, expr in zip(seq_syms, seq_expr):
+        assign(sym, expr)
 
 
 def _time_derivative(r: ca.SX, var_syms, sym_index, var_to_diff, time) -> ca.SX:
