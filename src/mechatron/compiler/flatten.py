@@ -12,6 +12,7 @@ import functools
 from dataclasses import dataclass, field
 
 import casadi as ca
+import numpy as np
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
@@ -299,29 +300,51 @@ def _summary(name: str, problems: list[str]) -> str:
 
 def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     """Bind a CasADi symbol to every parameter and variable; ports in ``folded`` get a
-    mapping that binds them on first read (see `_FoldedSymbols`) instead."""
+    mapping that binds them on first read (see `_FoldedSymbols`) instead.
+
+    The names (instance paths) are listed first, then the symbols of all parameters and
+    of all variables are made in one CasADi call each (`_symbols`); the column of the
+    variables is kept as `FlatModel.stack_variables`' column, and the row of each
+    element's first variable in it as ``flat._rows`` (for `_Template`)."""
     ctx = flat.context
     values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
-    variables, unknowns = flat.variables, ctx.unknowns
+    variables, parameters = flat.variables, flat.parameters
     shared = (flat, folded, problems)
+    par_names: list[str] = []
+    var_names: list[str] = []
+    bound = []
     for order, el in enumerate(elements):
         if folded and id(el) in folded:
-            el._syms = _FoldedSymbols(shared, el, len(variables), order)
+            el._syms = _FoldedSymbols(shared, el, len(var_names), order)
             continue
+        params, plain = _declaration_plan(type(el))
+        path = el.path
+        prefix = f"{path}." if path else ""
+        if params:
+            par_names.extend([prefix + p[0] for p in params])
+        if plain:
+            var_names.extend([prefix + p[0] for p in plain])
+        bound.append((el, prefix, params, plain))
+    par_syms = _symbols(par_names)[1]
+    var_column, var_syms = _symbols(var_names)
+    rows = flat.__dict__.setdefault("_rows", {})
+    base = len(variables)            # variables bound before (none in flatten)
+    pi = vi = 0
+    for el, prefix, params, plain in bound:
         syms = {}
         own_values = values[id(el)] = {}
         owner = el._parent if isinstance(el, Connector) else el
         owner_path = owner.path if owner is not None else ""
-        prefix = f"{el.path}." if el.path else ""
-        params, plain = _declaration_plan(type(el))
         for key, decl in params:
-            path = prefix + key
+            path = par_names[pi]
+            sym = par_syms[pi]
+            pi += 1
             raw = el._values.get(key, decl.default)
             if isinstance(raw, ParameterExpression):
                 syms[key], own_values[key] = _bind_expression(
                     flat, el, key, decl, raw, values, problems)
                 continue
-            sym = syms[key] = ca.SX.sym(path)
+            syms[key] = sym
             value = float("nan")
             if raw is None:
                 problems.add(ParameterError,
@@ -335,14 +358,36 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 else:
                     _check_range(el, key, decl, value, problems)
             own_values[key] = value
-            flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
-                                                  owner_path, (decl.min, decl.max))
-        _bind_variables(flat, el, syms, prefix, owner_path, plain, problems)
+            parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
+                                             owner_path, (decl.min, decl.max))
+        if plain:
+            rows[id(el)] = base + vi
+            starts = el._starts
+            for key, kind, unit, doc, start, priority, hint, select in plain:
+                path = prefix + key
+                sym = syms[key] = var_syms[vi]
+                vi += 1
+                if starts:
+                    given = starts.get(key)
+                    if isinstance(given, Start):
+                        try:
+                            start = to_si(given.value, unit, path)
+                        except UnitError as exc:
+                            problems.add(UnitError, str(exc))
+                        priority = given.priority
+                variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path,
+                                               start, priority, hint, select)
         el._syms = syms
+    ctx.unknowns.update(zip(var_names, var_syms))
+    if not base and len(variables) == len(var_names):   # the column holds them all
+        flat.__dict__["_variable_stack"] = (len(var_names), var_column,
+                                            dict(zip(var_names, range(len(var_names)))))
 
 
 def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None:
+    """Bind the variables of ``el`` one by one (a port bound on first read)."""
     variables, unknowns = flat.variables, flat.context.unknowns
+    flat.__dict__.setdefault("_rows", {})[id(el)] = len(variables)
     starts = el._starts
     for key, kind, unit, doc, start, priority, hint, select in plain:
         path = prefix + key
@@ -357,6 +402,58 @@ def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None
         variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path, start,
                                        priority, hint, select)
         unknowns[path] = sym
+
+
+# -- symbols in bulk -------------------------------------------------------------------------
+# CasADi makes one named symbol per call (``SX.sym(name)``, about 3 us each from Python)
+# and names the elements of a vector symbol ``name_0, name_1, ...``, while every symbol
+# here must be named by its instance path (later passes look symbols up by name). A
+# column of symbols with given names is read instead from CasADi's own serialized form
+# of such a column (`casadi.SX.deserialize`), written here: a header with the column's
+# sparsity, then one record per symbol holding its name. The layout is checked against
+# ``SX.serialize`` once per process; if it ever differs, the symbols are made one by one.
+_SX_HEADER = bytes.fromhex("79df0d8648700000030000000000000000") + b"d"
+_SX_RECORD = b"d/" + bytes(7)
+_BULK: list = []        # [True/False] once checked
+
+
+def _serialized_column(names: list[str]) -> str:
+    """CasADi's serialized text of the column of the symbols ``names``."""
+    n = len(names)
+    sparsity = np.concatenate([[4 + n, n, 1, 0, n], np.arange(n), [n]]).astype("<i8")
+    parts = [_SX_HEADER, sparsity.tobytes()]
+    record = _SX_RECORD
+    for name in names:
+        raw = name.encode()
+        parts.append(record + len(raw).to_bytes(4, "little") + raw)
+    data = np.frombuffer(b"".join(parts), dtype=np.uint8)
+    text = np.empty(2 * data.size, dtype=np.uint8)     # each byte as two letters a-p,
+    text[0::2] = (data & 15) + 97                      # low half first
+    text[1::2] = (data >> 4) + 97
+    return text.tobytes().decode("ascii")
+
+
+def _bulk_ok() -> bool:
+    if not _BULK:
+        probe = ["a.b", "r1.p.v", "\u00e9" * 3, "x" * 300]
+        try:
+            ok = _serialized_column(probe) == ca.vertcat(
+                *[ca.SX.sym(n) for n in probe]).serialize()
+        except Exception:   # noqa: BLE001 - any failure: one call per symbol instead
+            ok = False
+        _BULK.append(ok)
+    return _BULK[0]
+
+
+def _symbols(names: list[str]) -> tuple[ca.SX, list[ca.SX]]:
+    """The column of new symbols named ``names`` and its elements, in few CasADi calls."""
+    if not names:
+        return ca.SX(0, 1), []
+    if len(names) > 8 and _bulk_ok():
+        column = ca.SX.deserialize(_serialized_column(names))
+        return column, ca.vertsplit(column)
+    syms = [ca.SX.sym(n) for n in names]
+    return ca.vertcat(*syms), syms
 
 
 class _FoldedSymbols(dict):
