@@ -727,9 +727,10 @@ class _Template:
     instance, as before."""
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
-                 "equations", "n_eq", "aliases", "relative", "var_slots", "paths")
+                 "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
+                 "var_rows", "bases", "hints", "root_hints")
 
-    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables):
+    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None):
         self.keys = keys            # own declaration keys, in template order
         self.ports = ports          # [(port name, [keys])]
         self.derived = derived      # template positions whose derivative appears
@@ -741,6 +742,8 @@ class _Template:
         self.instances: list = []   # SX column of each instance's symbols
         self.paths: list = []       # each instance's path
         self.equations: list = []   # FlatEquation of each instance, in order
+        #: each instance's first rows in the model's variables: its own, then its ports'
+        self.bases: list = []
         # each slot's path relative to the instance, and the alias pattern of each
         # equation over the slots (read once here, not once per instance)
         self.relative = [f".{k}" for k in keys] + \
@@ -748,31 +751,48 @@ class _Template:
         index = {s.name(): i for i, s in enumerate(syms)}
         # which of the slots of self.relative are variables (not parameters)
         self.var_slots = [syms[i].name() in variables for i in range(len(self.relative))]
+        #: for each variable slot, (which base: 0 own, 1 + j port j; row after it)
+        self.var_rows = var_rows
         self.aliases = [_alias_pattern(r, index, variables)
                         for r in ca.vertsplit(residuals)] if lhs else []
+        rel = self.relative
+        # the alias hints by path relative to an instance (".v"), and for the root
+        self.hints = [p if p[0] == "none" else
+                      ("pair", rel[p[1]], rel[p[2]], p[3]) if p[0] == "pair"
+                      else ("const", rel[p[1]], p[2]) for p in self.aliases]
+        self.root_hints = [h if h[0] == "none" else
+                           (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
+                           (h[0], h[1][1:], h[2]) for h in self.hints]
 
     def add(self, flat: FlatModel, el, where: str) -> None:
         syms = el._syms
         args = [syms[k] for k in self.keys]
         children = el._children
+        rows = flat.__dict__.get("_rows", {})
+        bases = [rows.get(id(el), -1)]
         for port, keys in self.ports:
-            psyms = children[port]._syms
-            args.extend(psyms[k] for k in keys)
-        der = flat.context.der_symbol
-        args.extend([der(args[i].name()) for i in self.derived])
+            port = children[port]
+            psyms = port._syms
+            args.extend([psyms[k] for k in keys])
+            bases.append(rows.get(id(port), -1))
+        owner = el.path
+        if self.derived:
+            der = flat.context.der_symbol
+            rel = self.relative
+            if owner:
+                args.extend([der(owner + rel[i]) for i in self.derived])
+            else:
+                args.extend([der(rel[i][1:]) for i in self.derived])
         args.append(flat.context.time)
         self.instances.append(args)
-        self.paths.append(el.path)
-        owner = el.path
-        prefix = owner
-        rel = self.relative
-        hints = [p if p[0] == "none" else
-                 ("pair", prefix + rel[p[1]], prefix + rel[p[2]], p[3]) if p[0] == "pair"
-                 else ("const", prefix + rel[p[1]], p[2]) for p in self.aliases]
-        if not prefix:              # the root: paths without the leading dot
+        self.paths.append(owner)
+        self.bases.append(bases)
+        if owner:
             hints = [h if h[0] == "none" else
-                     (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
-                     (h[0], h[1][1:], h[2]) for h in hints]
+                     ("pair", owner + h[1], owner + h[2], h[3]) if h[0] == "pair"
+                     else ("const", owner + h[1], h[2]) for h in self.hints]
+        else:
+            hints = self.root_hints
         eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hints[k])
                for k in range(self.n_eq)]
         self.equations.append(eqs)
@@ -795,28 +815,27 @@ class _Template:
                 eq.residual = out[k]
                 k += 1
 
-
     def _columns(self, flat: FlatModel, n: int, width: int):
         """The instances' arguments as a ``width`` x ``n`` matrix; the variable slots are
-        sliced from the model's stacked variable symbols (`FlatModel.stack_variables`),
-        only the other slots (parameters, derivatives, time) are stacked here. None if a
-        variable slot is not a model variable (then the caller stacks every argument)."""
-        variables = flat.variables
-        slots = [i for i, name in enumerate(self.relative) if self.var_slots[i]]
-        if not slots:
+        taken from the model's stacked variable symbols (`FlatModel.stack_variables`) by
+        the rows of each instance's variables, recorded as they were bound; only the
+        other slots (parameters, derivatives, time) are stacked here. None if the rows
+        are not known (then the caller stacks every argument)."""
+        slots = [i for i in range(len(self.relative)) if self.var_slots[i]]
+        if not slots or self.var_rows is None:
             return None
+        bases = np.array(self.bases, dtype=np.int64).reshape(n, -1)
+        which = np.array([self.var_rows[i][0] for i in slots], dtype=np.int64)
+        offset = np.array([self.var_rows[i][1] for i in slots], dtype=np.int64)
+        if (bases[:, which] < 0).any():
+            return None
+        rows = (bases[:, which] + offset).ravel()
+        column = flat.stack_variables()
+        if rows.max() >= column.numel():
+            return None
+        var_part = ca.reshape(column[rows.tolist()], len(slots), n)
         others = [i for i in range(width) if i >= len(self.relative) or
                   not self.var_slots[i]]
-        names = []
-        rel = self.relative
-        for path, args in zip(self.paths, self.instances):
-            for i in slots:
-                name = path + rel[i] if path else rel[i][1:]
-                v = variables.get(name)
-                if v is None or v.sym is not args[i]:
-                    return None
-                names.append(name)
-        var_part = ca.reshape(flat.stack_variables(names), len(slots), n)
         if others:
             rest = ca.vertcat(*[args[i] for args in self.instances for i in others])
             stacked = ca.vertcat(var_part, ca.reshape(rest, len(others), n))
@@ -954,8 +973,20 @@ def _template(flat: FlatModel, el, templates: dict):
         return None
     # a parameter bound to an expression of the parent's parameters (Resistor(R=R/2))
     # fills its slot with that expression
+    # the row of each variable slot after its element's first variable
+    var_rows = {}
+    own_vars = [p[0] for p in _declaration_plan(cls)[1]]
+    for i, k in enumerate(keys):
+        if k in own_vars:
+            var_rows[i] = (0, own_vars.index(k))
+    i = len(keys)
+    for j, (name, ks) in enumerate(ports):
+        port_vars = [p[0] for p in _declaration_plan(type(el._children[name]))[1]]
+        for k in ks:
+            var_rows[i] = (1 + j, port_vars.index(k))
+            i += 1
     tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs,
-                    variables)
+                    variables, var_rows)
     templates[cls] = tpl
     return tpl
 
