@@ -303,15 +303,18 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     mapping that binds them on first read (see `_FoldedSymbols`) instead.
 
     The names (instance paths) are listed first, then the symbols of all parameters and
-    of all variables are made in one CasADi call each (`_symbols`); the column of the
-    variables is kept as `FlatModel.stack_variables`' column, and the row of each
-    element's first variable in it as ``flat._rows`` (for `_Template`)."""
+    of all variables are made in one CasADi call each (`_symbols`) and every variable's
+    record in one pass; values and start values are then read element by element. The
+    column of the variables is kept as `FlatModel.stack_variables`' column, and the row
+    of each element's first variable in it as ``flat._rows`` (for `_Template`)."""
     ctx = flat.context
     values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
     variables, parameters = flat.variables, flat.parameters
     shared = (flat, folded, problems)
     par_names: list[str] = []
     var_names: list[str] = []
+    var_plain: list[tuple] = []         # each variable's entry of its class's plan
+    var_owner: list[str] = []
     bound = []
     for order, el in enumerate(elements):
         if folded and id(el) in folded:
@@ -323,60 +326,68 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         if params:
             par_names.extend([prefix + p[0] for p in params])
         if plain:
+            owner = el._parent if isinstance(el, Connector) else el
             var_names.extend([prefix + p[0] for p in plain])
-        bound.append((el, prefix, params, plain))
+            var_plain.extend(plain)
+            var_owner.extend([owner.path if owner is not None else ""] * len(plain))
+        bound.append((el, params, plain))
     par_syms = _symbols(par_names)[1]
     var_column, var_syms = _symbols(var_names)
-    rows = flat.__dict__.setdefault("_rows", {})
+    records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint, select)
+               for path, sym, (_, kind, unit, doc, start, priority, hint, select), owner
+               in zip(var_names, var_syms, var_plain, var_owner)]
     base = len(variables)            # variables bound before (none in flatten)
+    variables.update(zip(var_names, records))
+    rows = flat.__dict__.setdefault("_rows", {})
     pi = vi = 0
-    for el, prefix, params, plain in bound:
-        syms = {}
+    for el, params, plain in bound:
         own_values = values[id(el)] = {}
-        owner = el._parent if isinstance(el, Connector) else el
-        owner_path = owner.path if owner is not None else ""
-        for key, decl in params:
-            path = par_names[pi]
-            sym = par_syms[pi]
-            pi += 1
-            raw = el._values.get(key, decl.default)
-            if isinstance(raw, ParameterExpression):
-                syms[key], own_values[key] = _bind_expression(
-                    flat, el, key, decl, raw, values, problems)
-                continue
-            syms[key] = sym
-            value = float("nan")
-            if raw is None:
-                problems.add(ParameterError,
-                             f"{el.describe()}: parameter {key} has no value and no "
-                             f"default. Give one, e.g. {type(el).__name__}({key}=...).")
-            else:
-                try:
-                    value = to_si(raw, decl.unit, path)
-                except UnitError as exc:
-                    problems.add(UnitError, str(exc))
+        if params:
+            syms = {}
+            owner = el._parent if isinstance(el, Connector) else el
+            owner_path = owner.path if owner is not None else ""
+            for key, decl in params:
+                path = par_names[pi]
+                sym = par_syms[pi]
+                pi += 1
+                raw = el._values.get(key, decl.default)
+                if isinstance(raw, ParameterExpression):
+                    syms[key], own_values[key] = _bind_expression(
+                        flat, el, key, decl, raw, values, problems)
+                    continue
+                syms[key] = sym
+                value = float("nan")
+                if raw is None:
+                    problems.add(ParameterError,
+                                 f"{el.describe()}: parameter {key} has no value and no "
+                                 f"default. Give one, e.g. {type(el).__name__}({key}=...).")
                 else:
-                    _check_range(el, key, decl, value, problems)
-            own_values[key] = value
-            parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
-                                             owner_path, (decl.min, decl.max))
+                    try:
+                        value = raw if type(raw) is float else to_si(raw, decl.unit, path)
+                    except UnitError as exc:
+                        problems.add(UnitError, str(exc))
+                    else:
+                        _check_range(el, key, decl, value, problems)
+                own_values[key] = value
+                parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
+                                                 owner_path, (decl.min, decl.max))
+            syms.update(zip([p[0] for p in plain], var_syms[vi:vi + len(plain)]))
+        else:
+            syms = dict(zip([p[0] for p in plain], var_syms[vi:vi + len(plain)]))
         if plain:
             rows[id(el)] = base + vi
             starts = el._starts
-            for key, kind, unit, doc, start, priority, hint, select in plain:
-                path = prefix + key
-                sym = syms[key] = var_syms[vi]
-                vi += 1
-                if starts:
+            if starts:
+                for j, (key, _, unit, *_) in enumerate(plain):
                     given = starts.get(key)
                     if isinstance(given, Start):
+                        record = records[vi + j]
                         try:
-                            start = to_si(given.value, unit, path)
+                            record.start = to_si(given.value, unit, record.name)
                         except UnitError as exc:
                             problems.add(UnitError, str(exc))
-                        priority = given.priority
-                variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path,
-                                               start, priority, hint, select)
+                        record.priority = given.priority
+            vi += len(plain)
         el._syms = syms
     ctx.unknowns.update(zip(var_names, var_syms))
     if not base and len(variables) == len(var_names):   # the column holds them all
@@ -1036,25 +1047,6 @@ def _short(expr, limit: int = 80) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
-class _UnionFind:
-    def __init__(self):
-        self.parent: dict[int, int] = {}
-
-    def find(self, a: int) -> int:
-        self.parent.setdefault(a, a)
-        root = a
-        while self.parent[root] != root:
-            root = self.parent[root]
-        while self.parent[a] != root:
-            self.parent[a], a = root, self.parent[a]
-        return root
-
-    def union(self, a: int, b: int) -> None:
-        ra, rb = self.find(a), self.find(b)
-        if ra != rb:
-            self.parent[rb] = ra
-
-
 def _resolve(flat: FlatModel, port, sym_owner):
     """A Connector, a SignalRef, or a bound signal symbol -> Connector or SignalRef."""
     if isinstance(port, (Connector, SignalRef)):
@@ -1074,9 +1066,8 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     the nodes they join (:mod:`mechatron.compiler.folding`)."""
     sym_owner: dict[str, SignalRef] = {}
     for el in elements:
-        for key, decl in type(el)._declarations.items():
-            if isinstance(decl, (Input, Output)):
-                sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
+        for key in _signal_keys(type(el)):
+            sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
     joined = []
     tried: set[tuple] = set()  # ports of a failed connect: not reported again as open
     if planned and _reaches_inside(connects, planned):
@@ -1128,8 +1119,12 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     _flow_sums(flat, flow_sums)
     connected = inside_connected(sets) | tried
     wired_inside = {port_key(m.port) for s in sets for m in s.members if m.outside}
+    # the connectors by id (port_key of a Connector is ("port", id)), for the loop below
+    connected_ports = {key[1] for key in connected if key[0] == "port"}
     for el in elements:
-        if isinstance(el, Connector) and port_key(el) not in connected:
+        if isinstance(el, Connector):
+            if id(el) in connected_ports:
+                continue
             owner = el._parent
             if planned and (id(el) in folded or id(owner._parent) in planned):
                 continue            # folded, or wired inside a planned subsystem
@@ -1144,7 +1139,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
             problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
                             "or remove the component. "
                             f"{_hint(el)}".rstrip())
-        if isinstance(el, Component) and el is not model:  # the root's: external inputs
+        elif el is not model:       # a component; the root's inputs: external inputs
             for key in _input_keys(type(el)):
                 if port_key(SignalRef(el, key)) not in connected:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
@@ -1175,6 +1170,12 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     flat.folded = [FoldedPort(port.path, type(port), node[pid].path, flow[pid],
                               port._syms.position, port._syms.order)
                    for pid, port in folded.items()]
+
+
+@functools.lru_cache(maxsize=None)
+def _signal_keys(cls) -> tuple:
+    """The keys of a class's signal inputs and outputs, in declaration order."""
+    return tuple(k for k, d in cls._declarations.items() if isinstance(d, (Input, Output)))
 
 
 @functools.lru_cache(maxsize=None)
@@ -1326,26 +1327,44 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
     the ports of each physical node ``nodes`` (lists of members; a subsystem's port is one
     node inside and outside) and the ports of one domain on each component."""
-    net = _UnionFind()
-    for members in nodes:
-        ids = [id(m.port) for m in members]
-        for i in ids[1:]:
-            net.union(ids[0], i)
+    index: dict[int, int] = {}          # id(port) -> its number, in tree order
+    parent: list[int] = []              # union-find over the numbers
+
+    def find(a: int) -> int:
+        root = a
+        while parent[root] != root:
+            root = parent[root]
+        while parent[a] != root:
+            parent[a], a = root, parent[a]
+        return root
+
     for el in elements:
         if not isinstance(el, Component):
             continue
         first: dict[object, int] = {}     # domain -> the first port of it on el
         for port in el._children.values():
             if isinstance(port, Connector):
-                i = first.setdefault(type(port).domain, id(port))
-                if i != id(port):
-                    net.union(i, id(port))
+                k = index[id(port)] = len(parent)
+                i = first.setdefault(type(port).domain, k)
+                parent.append(i)        # joined to the first port of its domain
+    for members in nodes:
+        ra = None
+        for m in members:
+            k = index.get(id(m.port))
+            if k is None:               # not a port of a component: a network of its own
+                k = index[id(m.port)] = len(parent)
+                parent.append(k)
+            rb = find(k)
+            if ra is None:
+                ra = rb
+            elif rb != ra:
+                parent[rb] = ra
     networks: dict[int, list[Connector]] = {}
     grounded: set[int] = set()
     for members in nodes:
         for m in members:
             port = m.port
-            root = net.find(id(port))
+            root = find(index[id(port)])
             networks.setdefault(root, []).append(port)
             if port._parent is not None and port._parent._reference:
                 grounded.add(root)
