@@ -1080,16 +1080,20 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
         for port in list(folded.values()):
             port._syms.unfold()
         planned = folded = None
+    port_types = (Connector, SignalRef)
     for con, writer in connects:
-        where = writer.path or flat.name
         resolved = []
         for p in con.ports:
-            r = _resolve(flat, p, sym_owner)
+            r = p if isinstance(p, port_types) else _resolve(flat, p, sym_owner)
             if r is None:
+                where = writer.path or flat.name
                 problems.append(f"{where}: connect() takes ports, got {p!r}. Pass a port "
                                 "such as r1.p or a signal such as src.y.")
                 continue
             resolved.append(r)
+        if len(resolved) == 2 and type(resolved[0]) is type(resolved[1]):
+            joined.append((writer, resolved))       # the common case, compatible
+            continue
         ok = [resolved[0]] if resolved else []
         for a, b in zip(resolved, resolved[1:]):
             msg = _compatible(a, b)
@@ -1286,22 +1290,30 @@ def _units_compatible(a: str, b: str) -> bool:
 
 def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
     members = cset.members
-    origin = "connect(" + ", ".join(m.path for m in members) + ")"
-    cls = type(members[0].port)
     first = members[0]
+    origin = "connect(" + ", ".join([m.path for m in members]) + ")"
+    across, through = _port_variables(type(first.port))
     ports = [m for m in members if m.port is not first.port]  # a port is one node
-    for a in cls.across_names():
+    aliases = flat.aliases
+    for a in across:
+        target = f"{first.path}.{a}"
         for m in ports:
-            flat.aliases.append((f"{m.path}.{a}", f"{first.path}.{a}", 1.0, origin))
-    for t in cls.through_names():
+            aliases.append((f"{m.path}.{a}", target, 1.0, origin))
+    for t in through:
         if len(members) == 2 and ports:
             # first.sign * first.t + m.sign * m.t == 0
             m = ports[0]
-            flat.aliases.append((f"{m.path}.{t}", f"{first.path}.{t}",
-                                 -first.sign * m.sign, origin))
+            aliases.append((f"{m.path}.{t}", f"{first.path}.{t}",
+                            -first.sign * m.sign, origin))
         else:   # formed in bulk by _flow_sums
             flow_sums.append(([(f"{m.path}.{t}", m.sign) for m in members],
                               f"{origin}: sum of {t} == 0"))
+
+
+@functools.lru_cache(maxsize=None)
+def _port_variables(cls) -> tuple:
+    """A connector class's across and through keys (once per class)."""
+    return tuple(cls.across_names()), tuple(cls.through_names())
 
 
 def _flow_sums(flat: FlatModel, flow_sums) -> None:
