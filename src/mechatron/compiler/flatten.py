@@ -320,17 +320,22 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         if folded and id(el) in folded:
             el._syms = _FoldedSymbols(shared, el, len(var_names), order)
             continue
-        params, plain = _declaration_plan(type(el))
+        params, plain, par_keys, var_keys = _binding_plan(type(el))
         path = el.path
-        prefix = f"{path}." if path else ""
-        if params:
-            par_names.extend([prefix + p[0] for p in params])
+        if path:
+            prefix = path + "."
+            if params:
+                par_names.extend([prefix + k for k in par_keys])
+            if plain:
+                var_names.extend([prefix + k for k in var_keys])
+        else:
+            par_names.extend(par_keys)
+            var_names.extend(var_keys)
         if plain:
             owner = el._parent if isinstance(el, Connector) else el
-            var_names.extend([prefix + p[0] for p in plain])
             var_plain.extend(plain)
             var_owner.extend([owner.path if owner is not None else ""] * len(plain))
-        bound.append((el, params, plain))
+        bound.append((el, params, plain, var_keys))
     par_syms = _symbols(par_names)[1]
     var_column, var_syms = _symbols(var_names)
     records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint, select)
@@ -340,9 +345,9 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     variables.update(zip(var_names, records))
     rows = flat.__dict__.setdefault("_rows", {})
     pi = vi = 0
-    for el, params, plain in bound:
-        own_values = values[id(el)] = {}
+    for el, params, plain, var_keys in bound:
         if params:
+            own_values = values[id(el)] = {}
             syms = {}
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner.path if owner is not None else ""
@@ -371,9 +376,12 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 own_values[key] = value
                 parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
                                                  owner_path, (decl.min, decl.max))
-            syms.update(zip([p[0] for p in plain], var_syms[vi:vi + len(plain)]))
+            if plain:
+                syms.update(zip(var_keys, var_syms[vi:vi + len(plain)]))
+        elif plain:
+            syms = dict(zip(var_keys, var_syms[vi:vi + len(plain)]))
         else:
-            syms = dict(zip([p[0] for p in plain], var_syms[vi:vi + len(plain)]))
+            syms = {}
         if plain:
             rows[id(el)] = base + vi
             starts = el._starts
@@ -516,6 +524,13 @@ def _declaration_plan(cls):
         plain.append((key, kind, decl.unit, decl.doc, decl.start, decl.priority, hint,
                       getattr(decl, "state_select", "default")))
     return tuple(params), tuple(plain)
+
+
+@functools.lru_cache(maxsize=None)
+def _binding_plan(cls):
+    """`_declaration_plan` of ``cls`` with the keys of its parameters and variables."""
+    params, plain = _declaration_plan(cls)
+    return params, plain, tuple(p[0] for p in params), tuple(p[0] for p in plain)
 
 
 def _bind_expression(flat, el, key, decl, expr, values, problems):
