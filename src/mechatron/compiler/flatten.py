@@ -336,7 +336,9 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             var_plain.extend(plain)
             var_owner.extend([owner.path if owner is not None else ""] * len(plain))
         bound.append((el, params, plain, var_keys))
-    par_syms = _symbols(par_names)[1]
+    par_column, par_syms = _symbols(par_names)
+    flat.__dict__["_parameter_column"] = par_column
+    par_rows = flat.__dict__["_parameter_rows"] = {}    # id -> first row, if all plain
     var_column, var_syms = _symbols(var_names)
     records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint, select)
                for path, sym, (_, kind, unit, doc, start, priority, hint, select), owner
@@ -351,6 +353,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             syms = {}
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner.path if owner is not None else ""
+            par_rows[id(el)] = pi
             for key, decl in params:
                 path = par_names[pi]
                 sym = par_syms[pi]
@@ -359,6 +362,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 if isinstance(raw, ParameterExpression):
                     syms[key], own_values[key] = _bind_expression(
                         flat, el, key, decl, raw, values, problems)
+                    par_rows[id(el)] = -1       # an expression: not a row of the column
                     continue
                 syms[key] = sym
                 value = float("nan")
@@ -751,9 +755,10 @@ class _Template:
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
                  "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
-                 "var_rows", "bases", "hints", "root_hints")
+                 "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases")
 
-    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None):
+    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
+                 par_slots=()):
         self.keys = keys            # own declaration keys, in template order
         self.ports = ports          # [(port name, [keys])]
         self.derived = derived      # template positions whose derivative appears
@@ -776,6 +781,9 @@ class _Template:
         self.var_slots = [syms[i].name() in variables for i in range(len(self.relative))]
         #: for each variable slot, (which base: 0 own, 1 + j port j; row after it)
         self.var_rows = var_rows
+        #: the parameter slots, each the same row after the element's first parameter
+        self.par_slots = par_slots
+        self.par_bases: list = []   # each instance's first parameter row (-1: none)
         self.aliases = [_alias_pattern(r, index, variables)
                         for r in ca.vertsplit(residuals)] if lhs else []
         rel = self.relative
@@ -810,6 +818,8 @@ class _Template:
         self.instances.append(args)
         self.paths.append(owner)
         self.bases.append(bases)
+        if self.par_slots:
+            self.par_bases.append(flat.__dict__.get("_parameter_rows", {}).get(id(el), -1))
         if owner:
             hints = [h if h[0] == "none" else
                      ("pair", owner + h[1], owner + h[2], h[3]) if h[0] == "pair"
@@ -859,12 +869,24 @@ class _Template:
         var_part = ca.reshape(column[rows.tolist()], len(slots), n)
         others = [i for i in range(width) if i >= len(self.relative) or
                   not self.var_slots[i]]
-        if others:
+        par_slots = list(self.par_slots)
+        par_bases = np.array(self.par_bases, dtype=np.int64)
+        parameters = flat.__dict__.get("_parameter_column")
+        if par_slots and parameters is not None and (par_bases >= 0).all():
+            # parameters by their rows, time as one row, only derivatives stacked
+            rows = (par_bases[:, None] + np.arange(len(par_slots))).ravel()
+            ders = [i for i in others if i not in par_slots and i != width - 1]
+            parts = [var_part, ca.reshape(parameters[rows.tolist()], len(par_slots), n)]
+            if ders:
+                parts.append(ca.reshape(ca.vertcat(
+                    *[args[i] for args in self.instances for i in ders]), len(ders), n))
+            parts.append(ca.repmat(flat.context.time, 1, n))
+            stacked = ca.vertcat(*parts)
+            order = slots + par_slots + ders + [width - 1]
+        else:
             rest = ca.vertcat(*[args[i] for args in self.instances for i in others])
             stacked = ca.vertcat(var_part, ca.reshape(rest, len(others), n))
-        else:
-            stacked = var_part
-        order = slots + others            # row r of stacked holds slot order[r]
+            order = slots + others          # row r of stacked holds slot order[r]
         position = [0] * width
         for r, i in enumerate(order):
             position[i] = r
@@ -1008,8 +1030,14 @@ def _template(flat: FlatModel, el, templates: dict):
         for k in ks:
             var_rows[i] = (1 + j, port_vars.index(k))
             i += 1
+    # parameter slots: the first keys, in the order of the class's parameters
+    par_keys = [p[0] for p in _declaration_plan(cls)[0]]
+    par_slots = tuple(i for i, k in enumerate(keys) if k in par_keys)
+    if [keys[i] for i in par_slots] != par_keys[:len(par_slots)] or \
+            list(par_slots) != list(range(len(par_slots))):
+        par_slots = ()                  # not laid out as bound: stacked one by one
     tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs,
-                    variables, var_rows)
+                    variables, var_rows, par_slots)
     templates[cls] = tpl
     return tpl
 
