@@ -707,7 +707,7 @@ def _collect_equations(flat: FlatModel, elements, problems,
             continue
         tpl = _template(flat, el, templates)
         if tpl is not None:
-            if "equations" in vars(type(el)):
+            if "equations" in vars(type(el)) and _has_time_scales(type(el)):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
             tpl.add(flat, el, where)
             continue
@@ -733,6 +733,12 @@ def _collect_equations(flat: FlatModel, elements, problems,
         for eq, r in zip(pending, ca.vertsplit(res)):
             eq.residual = r
     return connects
+
+
+@functools.lru_cache(maxsize=None)
+def _has_time_scales(cls) -> bool:
+    """Whether ``cls`` overrides `Component.time_scales` (which has none)."""
+    return cls.time_scales is not Component.time_scales
 
 
 # -- one expression graph per component class ------------------------------------------------
@@ -799,37 +805,38 @@ class _Template:
         syms = el._syms
         args = [syms[k] for k in self.keys]
         children = el._children
-        rows = flat.__dict__.get("_rows", {})
+        state = flat.__dict__
+        rows = state.get("_rows", {})
         bases = [rows.get(id(el), -1)]
         for port, keys in self.ports:
             port = children[port]
             psyms = port._syms
-            args.extend([psyms[k] for k in keys])
+            args += [psyms[k] for k in keys]
             bases.append(rows.get(id(port), -1))
         owner = el.path
         if self.derived:
             der = flat.context.der_symbol
             rel = self.relative
             if owner:
-                args.extend([der(owner + rel[i]) for i in self.derived])
+                args += [der(owner + rel[i]) for i in self.derived]
             else:
-                args.extend([der(rel[i][1:]) for i in self.derived])
+                args += [der(rel[i][1:]) for i in self.derived]
         args.append(flat.context.time)
         self.instances.append(args)
         self.paths.append(owner)
         self.bases.append(bases)
         if self.par_slots:
-            self.par_bases.append(flat.__dict__.get("_parameter_rows", {}).get(id(el), -1))
+            self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
         if owner:
             hints = [h if h[0] == "none" else
                      ("pair", owner + h[1], owner + h[2], h[3]) if h[0] == "pair"
                      else ("const", owner + h[1], h[2]) for h in self.hints]
         else:
             hints = self.root_hints
-        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hints[k])
-               for k in range(self.n_eq)]
+        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hint)
+               for k, hint in enumerate(hints)]
         self.equations.append(eqs)
-        flat.equations.extend(eqs)
+        flat.equations += eqs
 
     def instantiate(self, flat: FlatModel) -> None:
         """Every instance's residuals from one call of the mapped function."""
@@ -953,7 +960,7 @@ def _template(flat: FlatModel, el, templates: dict):
     """The `_Template` of ``el``'s class, built from ``el`` on first use; None if the
     class does not qualify (see `_Template`)."""
     cls = type(el)
-    if any(k not in _PLAIN_KEYS and k not in el._children for k in el.__dict__):
+    if el.__dict__.keys() - _PLAIN_KEYS - el._children.keys():
         return None                 # instance attributes: equations may differ
     if cls in templates:
         return templates[cls]
