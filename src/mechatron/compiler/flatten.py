@@ -1385,6 +1385,16 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
         flat.equations.append(FlatEquation(residual, origin))
 
 
+_DOMAINS: dict = {}
+
+
+@functools.lru_cache(maxsize=None)
+def _domain_id(cls) -> int:
+    """A number for a connector class's domain, equal for equal domains (a domain is
+    compared by value), worked out once per class."""
+    return id(_DOMAINS.setdefault(cls.domain, cls.domain))
+
+
 def _check_references(flat, model, elements, nodes, problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
     the ports of each physical node ``nodes`` (lists of members; a subsystem's port is one
@@ -1403,11 +1413,11 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
     for el in elements:
         if not isinstance(el, Component):
             continue
-        first: dict[object, int] = {}     # domain -> the first port of it on el
+        first: dict[int, int] = {}     # domain -> the first port of it on el
         for port in el._children.values():
             if isinstance(port, Connector):
                 k = index[id(port)] = len(parent)
-                i = first.setdefault(type(port).domain, k)
+                i = first.setdefault(_domain_id(type(port)), k)
                 parent.append(i)        # joined to the first port of its domain
     for members in nodes:
         ra = None
