@@ -172,10 +172,19 @@ def _walk(root: Element):
     while stack:
         el = stack.pop()
         yield el
-        children = list(el._children.values())
-        for child in children:
-            child._path_cache = _join(el._path_cache, child._name)
-        stack.extend(reversed(children))
+        children = el._children
+        if children:
+            kids = list(children.values())
+            path = el._path_cache
+            if path:
+                path += "."
+                for child in kids:
+                    child._path_cache = path + child._name
+            else:
+                for child in kids:
+                    child._path_cache = child._name
+            kids.reverse()
+            stack += kids
 
 
 class _Origin:
@@ -218,12 +227,13 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     problems = _Problems()
     elements = list(_walk(model))
     planned, folded = plan_subsystems(model, elements)
+    components = flat.components
     for el in elements:
-        if isinstance(el, Component) and el._partial and el is not model:
-            problems.append(f"{el.describe()}: {type(el).__name__} is a partial class "
-                            "(an interface); use a concrete component.")
         if isinstance(el, Component):
-            flat.components[el.path] = type(el).__name__
+            if el._partial and el is not model:
+                problems.append(f"{el.describe()}: {type(el).__name__} is a partial "
+                                "class (an interface); use a concrete component.")
+            components[el._path_cache] = type(el).__name__
     _bind_symbols(flat, elements, problems, folded)
     _external_inputs(flat, model)
     try:
