@@ -16,8 +16,7 @@ import numpy as np
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
-from mechatron.core.connections import (connection_sets, inside_connected, is_driver,
-                                        port_key)
+from mechatron.core.connections import connection_sets, is_driver, port_key
 from mechatron.core.context import BuildContext
 from mechatron.core.declarations import (Across, Discrete, Input, Output, Parameter,
                                          ParameterExpression, Start, Through, Variable)
@@ -1167,10 +1166,13 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     sets = connection_sets(joined)
     flow_sums: list = []
     for cset in sets:
-        flat.connection_sets.append([_set_member(m) for m in cset.members])
         if cset.is_signal:
+            flat.connection_sets.append([_set_member(m) for m in cset.members])
             _signal_set(flat, cset, problems, model)
-        elif not planned:
+            continue
+        flat.connection_sets.append([(m.path, type(m.port).domain, False)
+                                     for m in cset.members])     # as _set_member
+        if not planned:
             _physical_set(flat, cset, flow_sums)
     if planned:
         joining = join_planned(sets, planned, folded)
@@ -1181,10 +1183,25 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     else:
         nodes = [cset.members for cset in sets if not cset.is_signal]
     _flow_sums(flat, flow_sums)
-    connected = inside_connected(sets) | tried
-    wired_inside = {port_key(m.port) for s in sets for m in s.members if m.outside}
-    # the connectors by id (port_key of a Connector is ("port", id)), for the loop below
-    connected_ports = {key[1] for key in connected if key[0] == "port"}
+    # what inside_connected(sets) | tried holds (port_key of each port connected from
+    # outside its component), connectors by id and signals by key; and the ports
+    # wired inside their own component
+    connected_ports: set[int] = set()
+    connected: set[tuple] = set()
+    wired_inside: set[tuple] = set()
+    for cset in sets:
+        for m in cset.members:
+            if m.outside:
+                wired_inside.add(port_key(m.port))
+            elif isinstance(m.port, SignalRef):
+                connected.add(port_key(m.port))
+            else:
+                connected_ports.add(id(m.port))
+    for key in tried:
+        if key[0] == "port":
+            connected_ports.add(key[1])
+        else:
+            connected.add(key)
     for el in elements:
         if isinstance(el, Connector):
             if id(el) in connected_ports:
@@ -1475,7 +1492,8 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     anywhere is a discrete Real (its ``der(v) == 0`` was added by ``_discrete_states``).
     """
     ctx = flat.context
-    for eq in flat.equations:
+    # the equations der(v) == 0 of `_discrete_states`, which only event actions add
+    for eq in flat.equations if flat.events else ():
         if isinstance(eq.origin, str) and eq.origin.endswith("changed only by events)"):
             name = ctx.integral.get(eq.residual.name()) if eq.residual.is_symbolic() else None
             if name:
@@ -1494,7 +1512,7 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
                     "(discrete variable, changed only by events)", el.path))
             flat.discrete[sym_name] = decl.discrete_kind
     for el in elements:
-        if not isinstance(el, Component):
+        if not isinstance(el, Component) or not _own_methods(type(el), "initial_equations"):
             continue
         for klass, items in _class_calls(el, "initial_equations", el.path):
             for k, item in enumerate(_as_equations(items)):
