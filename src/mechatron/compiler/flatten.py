@@ -330,7 +330,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             el._syms = _FoldedSymbols(shared, el, len(var_names), order)
             continue
         params, plain, par_keys, var_keys = _binding_plan(type(el))
-        path = el.path
+        path = el._path_cache         # set by _walk
         if path:
             prefix = path + "."
             if params:
@@ -343,7 +343,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         if plain:
             owner = el._parent if isinstance(el, Connector) else el
             var_plain.extend(plain)
-            var_owner.extend([owner.path if owner is not None else ""] * len(plain))
+            var_owner.extend([owner._path_cache if owner is not None else ""] * len(plain))
         bound.append((el, params, plain, var_keys))
     par_column, par_syms = _symbols(par_names)
     flat.__dict__["_parameter_column"] = par_column
@@ -361,7 +361,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             own_values = values[id(el)] = {}
             syms = {}
             owner = el._parent if isinstance(el, Connector) else el
-            owner_path = owner.path if owner is not None else ""
+            owner_path = owner._path_cache if owner is not None else ""
             par_rows[id(el)] = pi
             for key, decl in params:
                 path = par_names[pi]
@@ -709,7 +709,7 @@ def _collect_equations(flat: FlatModel, elements, problems,
     for el in elements:
         if not isinstance(el, Component):
             continue
-        where = el.path or flat.name
+        where = el._path_cache or flat.name
         if planned and id(el) in planned:   # wired by its class's plan (folding)
             if planned[id(el)][1].has_time_scales:
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
@@ -822,7 +822,7 @@ class _Template:
             psyms = port._syms
             args += [psyms[k] for k in keys]
             bases.append(rows.get(id(port), -1))
-        owner = el.path
+        owner = el._path_cache
         if self.derived:
             der = flat.context.der_symbol
             rel = self.relative
@@ -1460,13 +1460,13 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
                 parent[rb] = ra
     networks: dict[int, list[Connector]] = {}
     grounded: set[int] = set()
-    for members in nodes:
-        for m in members:
-            port = m.port
-            root = find(index[id(port)])
-            networks.setdefault(root, []).append(port)
-            if port._parent is not None and port._parent._reference:
-                grounded.add(root)
+    for members in nodes:               # a node's members share their network
+        root = find(index[id(members[0].port)])
+        ports = [m.port for m in members]
+        networks.setdefault(root, []).extend(ports)
+        if root not in grounded and any(
+                p._parent is not None and p._parent._reference for p in ports):
+            grounded.add(root)
     for root, plist in networks.items():
         domain = type(plist[0]).domain
         if root in grounded or domain is None or not domain.needs_reference:
