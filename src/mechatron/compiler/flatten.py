@@ -706,19 +706,24 @@ def _collect_equations(flat: FlatModel, elements, problems,
                        planned=None) -> list[tuple[Connect, str]]:
     connects = []
     templates: dict = {}           # class -> _Template, or None where none applies
+    components = []
     for el in elements:
-        if not isinstance(el, Component):
-            continue
+        if isinstance(el, Component):
+            if planned and id(el) in planned:
+                components.append((el, None, True))
+            else:
+                components.append((el, _template(flat, el, templates), False))
+    ders = _template_derivatives(components)
+    for el, tpl, is_planned in components:
         where = el._path_cache or flat.name
-        if planned and id(el) in planned:   # wired by its class's plan (folding)
+        if is_planned:                      # wired by its class's plan (folding)
             if planned[id(el)][1].has_time_scales:
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
             continue
-        tpl = _template(flat, el, templates)
         if tpl is not None:
             if "equations" in vars(type(el)) and _has_time_scales(type(el)):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
-            tpl.add(flat, el, where)
+            tpl.add(flat, el, where, ders)
             continue
         for klass, items in _class_calls(el, "equations", where):
             if klass is type(el):
@@ -742,6 +747,25 @@ def _collect_equations(flat: FlatModel, elements, problems,
         for eq, r in zip(pending, ca.vertsplit(res)):
             eq.residual = r
     return connects
+
+
+def _template_derivatives(components) -> dict:
+    """The derivative symbols the template instances among ``components`` ``(element,
+    template, planned)`` will take, ``{variable name: symbol}``, made in one call; each
+    is registered with the build context (`BuildContext.der_symbol`) only when its
+    instance is added, so that the context lists derivatives in the order they are met."""
+    names = []
+    for el, tpl, _ in components:
+        if tpl is not None and tpl.derived:
+            rel = tpl.relative
+            path = el._path_cache
+            if path:
+                names.extend([path + rel[i] for i in tpl.derived])
+            else:
+                names.extend([rel[i][1:] for i in tpl.derived])
+    if not names:
+        return {}
+    return dict(zip(names, _symbols([f"der({n})" for n in names])[1]))
 
 
 @functools.lru_cache(maxsize=None)
@@ -810,7 +834,9 @@ class _Template:
                            (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
                            (h[0], h[1][1:], h[2]) for h in self.hints]
 
-    def add(self, flat: FlatModel, el, where: str) -> None:
+    def add(self, flat: FlatModel, el, where: str, ders=None) -> None:
+        """Add the instance ``el``; ``ders`` holds derivative symbols made beforehand
+        (`_template_derivatives`), by variable name."""
         syms = el._syms
         args = [syms[k] for k in self.keys]
         children = el._children
@@ -824,12 +850,22 @@ class _Template:
             bases.append(rows.get(id(port), -1))
         owner = el._path_cache
         if self.derived:
-            der = flat.context.der_symbol
             rel = self.relative
-            if owner:
-                args += [der(owner + rel[i]) for i in self.derived]
-            else:
-                args += [der(rel[i][1:]) for i in self.derived]
+            names = [owner + rel[i] for i in self.derived] if owner else \
+                [rel[i][1:] for i in self.derived]
+            ctx = flat.context
+            for name in names:
+                sym = ctx.derivative.get(name)
+                if sym is None:
+                    sym = ders.pop(name, None) if ders else None
+                    if sym is None:
+                        sym = ctx.der_symbol(name)
+                    else:                   # as der_symbol registers a new one
+                        key = f"der({name})"
+                        ctx.derivative[name] = sym
+                        ctx.integral[key] = name
+                        ctx.unknowns[key] = sym
+                args.append(sym)
         args.append(flat.context.time)
         self.instances.append(args)
         self.paths.append(owner)
