@@ -809,7 +809,8 @@ class _Template:
         self.instances: list = []   # SX column of each instance's symbols
         self.paths: list = []       # each instance's path
         self.equations: list = []   # FlatEquation of each instance, in order
-        #: each instance's first rows in the model's variables: its own, then its ports'
+        #: each instance's first rows in the model's variables, its own then its ports',
+        #: one instance after the other
         self.bases: list = []
         # each slot's path relative to the instance, and the alias pattern of each
         # equation over the slots (read once here, not once per instance)
@@ -842,7 +843,8 @@ class _Template:
         children = el._children
         state = flat.__dict__
         rows = state.get("_rows", {})
-        bases = [rows.get(id(el), -1)]
+        bases = self.bases
+        bases.append(rows.get(id(el), -1))
         for port, keys in self.ports:
             port = children[port]
             psyms = port._syms
@@ -869,7 +871,6 @@ class _Template:
         args.append(flat.context.time)
         self.instances.append(args)
         self.paths.append(owner)
-        self.bases.append(bases)
         if self.par_slots:
             self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
         if owner:
