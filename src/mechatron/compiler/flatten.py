@@ -349,7 +349,8 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     flat.__dict__["_parameter_column"] = par_column
     par_rows = flat.__dict__["_parameter_rows"] = {}    # id -> first row, if all plain
     var_column, var_syms = _symbols(var_names)
-    records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint, select)
+    records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint,
+                            select)
                for path, sym, (_, kind, unit, doc, start, priority, hint, select), owner
                in zip(var_names, var_syms, var_plain, var_owner)]
     base = len(variables)            # variables bound before (none in flatten)
@@ -436,7 +437,7 @@ def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None
         unknowns[path] = sym
 
 
-# -- symbols in bulk -------------------------------------------------------------------------
+# -- symbols in bulk ------------------------------------------------------------------------
 # CasADi makes one named symbol per call (``SX.sym(name)``, about 3 us each from Python)
 # and names the elements of a vector symbol ``name_0, name_1, ...``, while every symbol
 # here must be named by its instance path (later passes look symbols up by name). A
