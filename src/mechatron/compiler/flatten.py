@@ -12,11 +12,11 @@ import functools
 from dataclasses import dataclass, field
 
 import casadi as ca
+import numpy as np
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
-from mechatron.core.connections import (connection_sets, inside_connected, is_driver,
-                                        port_key)
+from mechatron.core.connections import connection_sets, is_driver, port_key
 from mechatron.core.context import BuildContext
 from mechatron.core.declarations import (Across, Discrete, Input, Output, Parameter,
                                          ParameterExpression, Start, Through, Variable)
@@ -171,10 +171,19 @@ def _walk(root: Element):
     while stack:
         el = stack.pop()
         yield el
-        children = list(el._children.values())
-        for child in children:
-            child._path_cache = _join(el._path_cache, child._name)
-        stack.extend(reversed(children))
+        children = el._children
+        if children:
+            kids = list(children.values())
+            path = el._path_cache
+            if path:
+                path += "."
+                for child in kids:
+                    child._path_cache = path + child._name
+            else:
+                for child in kids:
+                    child._path_cache = child._name
+            kids.reverse()
+            stack += kids
 
 
 class _Origin:
@@ -217,12 +226,13 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     problems = _Problems()
     elements = list(_walk(model))
     planned, folded = plan_subsystems(model, elements)
+    components = flat.components
     for el in elements:
-        if isinstance(el, Component) and el._partial and el is not model:
-            problems.append(f"{el.describe()}: {type(el).__name__} is a partial class "
-                            "(an interface); use a concrete component.")
         if isinstance(el, Component):
-            flat.components[el.path] = type(el).__name__
+            if el._partial and el is not model:
+                problems.append(f"{el.describe()}: {type(el).__name__} is a partial "
+                                "class (an interface); use a concrete component.")
+            components[el._path_cache] = type(el).__name__
     _bind_symbols(flat, elements, problems, folded)
     _external_inputs(flat, model)
     try:
@@ -299,50 +309,118 @@ def _summary(name: str, problems: list[str]) -> str:
 
 def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     """Bind a CasADi symbol to every parameter and variable; ports in ``folded`` get a
-    mapping that binds them on first read (see `_FoldedSymbols`) instead."""
+    mapping that binds them on first read (see `_FoldedSymbols`) instead.
+
+    The names (instance paths) are listed first, then the symbols of all parameters and
+    of all variables are made in one CasADi call each (`_symbols`) and every variable's
+    record in one pass; values and start values are then read element by element. The
+    column of the variables is kept as `FlatModel.stack_variables`' column, and the row
+    of each element's first variable in it as ``flat._rows`` (for `_Template`)."""
     ctx = flat.context
     values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
-    variables, unknowns = flat.variables, ctx.unknowns
+    variables, parameters = flat.variables, flat.parameters
     shared = (flat, folded, problems)
+    par_names: list[str] = []
+    var_names: list[str] = []
+    var_plain: list[tuple] = []         # each variable's entry of its class's plan
+    var_owner: list[str] = []
+    bound = []
     for order, el in enumerate(elements):
         if folded and id(el) in folded:
-            el._syms = _FoldedSymbols(shared, el, len(variables), order)
+            el._syms = _FoldedSymbols(shared, el, len(var_names), order)
             continue
-        syms = {}
-        own_values = values[id(el)] = {}
-        owner = el._parent if isinstance(el, Connector) else el
-        owner_path = owner.path if owner is not None else ""
-        prefix = f"{el.path}." if el.path else ""
-        params, plain = _declaration_plan(type(el))
-        for key, decl in params:
-            path = prefix + key
-            raw = el._values.get(key, decl.default)
-            if isinstance(raw, ParameterExpression):
-                syms[key], own_values[key] = _bind_expression(
-                    flat, el, key, decl, raw, values, problems)
-                continue
-            sym = syms[key] = ca.SX.sym(path)
-            value = float("nan")
-            if raw is None:
-                problems.add(ParameterError,
-                             f"{el.describe()}: parameter {key} has no value and no "
-                             f"default. Give one, e.g. {type(el).__name__}({key}=...).")
-            else:
-                try:
-                    value = to_si(raw, decl.unit, path)
-                except UnitError as exc:
-                    problems.add(UnitError, str(exc))
+        params, plain, par_keys, var_keys = _binding_plan(type(el))
+        path = el._path_cache         # set by _walk
+        if path:
+            prefix = path + "."
+            if params:
+                par_names.extend([prefix + k for k in par_keys])
+            if plain:
+                var_names.extend([prefix + k for k in var_keys])
+        else:
+            par_names.extend(par_keys)
+            var_names.extend(var_keys)
+        if plain:
+            owner = el._parent if isinstance(el, Connector) else el
+            var_plain.extend(plain)
+            var_owner.extend([owner._path_cache if owner is not None else ""] * len(plain))
+        bound.append((el, params, plain, var_keys))
+    par_column, par_syms = _symbols(par_names)
+    flat.__dict__["_parameter_column"] = par_column
+    par_rows = flat.__dict__["_parameter_rows"] = {}    # id -> first row, if all plain
+    var_column, var_syms = _symbols(var_names)
+    records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint,
+                            select)
+               for path, sym, (_, kind, unit, doc, start, priority, hint, select), owner
+               in zip(var_names, var_syms, var_plain, var_owner)]
+    base = len(variables)            # variables bound before (none in flatten)
+    variables.update(zip(var_names, records))
+    rows = flat.__dict__.setdefault("_rows", {})
+    pi = vi = 0
+    for el, params, plain, var_keys in bound:
+        if params:
+            own_values = values[id(el)] = {}
+            syms = {}
+            owner = el._parent if isinstance(el, Connector) else el
+            owner_path = owner._path_cache if owner is not None else ""
+            par_rows[id(el)] = pi
+            for key, decl in params:
+                path = par_names[pi]
+                sym = par_syms[pi]
+                pi += 1
+                raw = el._values.get(key, decl.default)
+                if isinstance(raw, ParameterExpression):
+                    syms[key], own_values[key] = _bind_expression(
+                        flat, el, key, decl, raw, values, problems)
+                    par_rows[id(el)] = -1       # an expression: not a row of the column
+                    continue
+                syms[key] = sym
+                value = float("nan")
+                if raw is None:
+                    problems.add(ParameterError,
+                                 f"{el.describe()}: parameter {key} has no value and no "
+                                 f"default. Give one, e.g. {type(el).__name__}({key}=...).")
                 else:
-                    _check_range(el, key, decl, value, problems)
-            own_values[key] = value
-            flat.parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
-                                                  owner_path, (decl.min, decl.max))
-        _bind_variables(flat, el, syms, prefix, owner_path, plain, problems)
+                    try:
+                        value = raw if type(raw) is float else to_si(raw, decl.unit, path)
+                    except UnitError as exc:
+                        problems.add(UnitError, str(exc))
+                    else:
+                        _check_range(el, key, decl, value, problems)
+                own_values[key] = value
+                parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
+                                                 owner_path, (decl.min, decl.max))
+            if plain:
+                syms.update(zip(var_keys, var_syms[vi:vi + len(plain)]))
+        elif plain:
+            syms = dict(zip(var_keys, var_syms[vi:vi + len(plain)]))
+        else:
+            syms = {}
+        if plain:
+            rows[id(el)] = base + vi
+            starts = el._starts
+            if starts:
+                for j, (key, _, unit, *_) in enumerate(plain):
+                    given = starts.get(key)
+                    if isinstance(given, Start):
+                        record = records[vi + j]
+                        try:
+                            record.start = to_si(given.value, unit, record.name)
+                        except UnitError as exc:
+                            problems.add(UnitError, str(exc))
+                        record.priority = given.priority
+            vi += len(plain)
         el._syms = syms
+    ctx.unknowns.update(zip(var_names, var_syms))
+    if not base and len(variables) == len(var_names):   # the column holds them all
+        flat.__dict__["_variable_stack"] = (len(var_names), var_column,
+                                            dict(zip(var_names, range(len(var_names)))))
 
 
 def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None:
+    """Bind the variables of ``el`` one by one (a port bound on first read)."""
     variables, unknowns = flat.variables, flat.context.unknowns
+    flat.__dict__.setdefault("_rows", {})[id(el)] = len(variables)
     starts = el._starts
     for key, kind, unit, doc, start, priority, hint, select in plain:
         path = prefix + key
@@ -357,6 +435,55 @@ def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None
         variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path, start,
                                        priority, hint, select)
         unknowns[path] = sym
+
+
+# -- symbols in bulk ------------------------------------------------------------------------
+# CasADi makes one named symbol per call (``SX.sym(name)``, about 3 us each from Python)
+# and names the elements of a vector symbol ``name_0, name_1, ...``, while every symbol
+# here must be named by its instance path (later passes look symbols up by name). A
+# column of symbols with given names is read instead from CasADi's own serialized form
+# of such a column (`casadi.SX.deserialize`), written here: a header with the column's
+# sparsity, then one record per symbol holding its name. The layout is checked against
+# ``SX.serialize`` once per process; if it ever differs, the symbols are made one by one.
+_SX_HEADER = bytes.fromhex("79df0d8648700000030000000000000000") + b"d"
+_SX_RECORD = b"d/" + bytes(7)
+_BULK: list = []        # [True/False] once checked
+
+
+def _serialized_column(names: list[str]) -> str:
+    """CasADi's serialized text of the column of the symbols ``names``."""
+    n = len(names)
+    sparsity = np.concatenate([[4 + n, n, 1, 0, n], np.arange(n), [n]]).astype("<i8")
+    body = b"".join([_SX_RECORD + len(raw).to_bytes(4, "little") + raw
+                     for raw in [name.encode() for name in names]])
+    data = np.frombuffer(_SX_HEADER + sparsity.tobytes() + body, dtype=np.uint8)
+    text = np.empty(2 * data.size, dtype=np.uint8)     # each byte as two letters a-p,
+    text[0::2] = (data & 15) + 97                      # low half first
+    text[1::2] = (data >> 4) + 97
+    return text.tobytes().decode("ascii")
+
+
+def _bulk_ok() -> bool:
+    if not _BULK:
+        probes = (["a.b", "r1.p.v", "x" * 300], ["a.b", "\u00e9" * 3, "x" * 300])
+        try:
+            ok = all(_serialized_column(probe) == ca.vertcat(
+                *[ca.SX.sym(n) for n in probe]).serialize() for probe in probes)
+        except Exception:   # noqa: BLE001 - any failure: one call per symbol instead
+            ok = False
+        _BULK.append(ok)
+    return _BULK[0]
+
+
+def _symbols(names: list[str]) -> tuple[ca.SX, list[ca.SX]]:
+    """The column of new symbols named ``names`` and its elements, in few CasADi calls."""
+    if not names:
+        return ca.SX(0, 1), []
+    if len(names) > 8 and _bulk_ok():
+        column = ca.SX.deserialize(_serialized_column(names))
+        return column, ca.vertsplit(column)
+    syms = [ca.SX.sym(n) for n in names]
+    return ca.vertcat(*syms), syms
 
 
 class _FoldedSymbols(dict):
@@ -411,6 +538,13 @@ def _declaration_plan(cls):
         plain.append((key, kind, decl.unit, decl.doc, decl.start, decl.priority, hint,
                       getattr(decl, "state_select", "default")))
     return tuple(params), tuple(plain)
+
+
+@functools.lru_cache(maxsize=None)
+def _binding_plan(cls):
+    """`_declaration_plan` of ``cls`` with the keys of its parameters and variables."""
+    params, plain = _declaration_plan(cls)
+    return params, plain, tuple(p[0] for p in params), tuple(p[0] for p in plain)
 
 
 def _bind_expression(flat, el, key, decl, expr, values, problems):
@@ -573,19 +707,24 @@ def _collect_equations(flat: FlatModel, elements, problems,
                        planned=None) -> list[tuple[Connect, str]]:
     connects = []
     templates: dict = {}           # class -> _Template, or None where none applies
+    components = []
     for el in elements:
-        if not isinstance(el, Component):
-            continue
-        where = el.path or flat.name
-        if planned and id(el) in planned:   # wired by its class's plan (folding)
+        if isinstance(el, Component):
+            if planned and id(el) in planned:
+                components.append((el, None, True))
+            else:
+                components.append((el, _template(flat, el, templates), False))
+    ders = _template_derivatives(components)
+    for el, tpl, is_planned in components:
+        where = el._path_cache or flat.name
+        if is_planned:                      # wired by its class's plan (folding)
             if planned[id(el)][1].has_time_scales:
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
             continue
-        tpl = _template(flat, el, templates)
         if tpl is not None:
-            if "equations" in vars(type(el)):
+            if "equations" in vars(type(el)) and _has_time_scales(type(el)):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
-            tpl.add(flat, el, where)
+            tpl.add(flat, el, where, ders)
             continue
         for klass, items in _class_calls(el, "equations", where):
             if klass is type(el):
@@ -611,6 +750,31 @@ def _collect_equations(flat: FlatModel, elements, problems,
     return connects
 
 
+def _template_derivatives(components) -> dict:
+    """The derivative symbols the template instances among ``components`` ``(element,
+    template, planned)`` will take, ``{variable name: symbol}``, made in one call; each
+    is registered with the build context (`BuildContext.der_symbol`) only when its
+    instance is added, so that the context lists derivatives in the order they are met."""
+    names = []
+    for el, tpl, _ in components:
+        if tpl is not None and tpl.derived:
+            rel = tpl.relative
+            path = el._path_cache
+            if path:
+                names.extend([path + rel[i] for i in tpl.derived])
+            else:
+                names.extend([rel[i][1:] for i in tpl.derived])
+    if not names:
+        return {}
+    return dict(zip(names, _symbols([f"der({n})" for n in names])[1]))
+
+
+@functools.lru_cache(maxsize=None)
+def _has_time_scales(cls) -> bool:
+    """Whether ``cls`` overrides `Component.time_scales` (which has none)."""
+    return cls.time_scales is not Component.time_scales
+
+
 # -- one expression graph per component class ------------------------------------------------
 _PLAIN_KEYS = frozenset(("doc", "_name", "_parent", "_values", "_starts", "_syms",
                          "_children", "_path_cache"))
@@ -630,9 +794,11 @@ class _Template:
     instance, as before."""
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
-                 "equations", "n_eq", "aliases", "relative", "var_slots", "paths")
+                 "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
+                 "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases")
 
-    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables):
+    def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
+                 par_slots=()):
         self.keys = keys            # own declaration keys, in template order
         self.ports = ports          # [(port name, [keys])]
         self.derived = derived      # template positions whose derivative appears
@@ -644,6 +810,9 @@ class _Template:
         self.instances: list = []   # SX column of each instance's symbols
         self.paths: list = []       # each instance's path
         self.equations: list = []   # FlatEquation of each instance, in order
+        #: each instance's first rows in the model's variables, its own then its ports',
+        #: one instance after the other
+        self.bases: list = []
         # each slot's path relative to the instance, and the alias pattern of each
         # equation over the slots (read once here, not once per instance)
         self.relative = [f".{k}" for k in keys] + \
@@ -651,35 +820,70 @@ class _Template:
         index = {s.name(): i for i, s in enumerate(syms)}
         # which of the slots of self.relative are variables (not parameters)
         self.var_slots = [syms[i].name() in variables for i in range(len(self.relative))]
+        #: for each variable slot, (which base: 0 own, 1 + j port j; row after it)
+        self.var_rows = var_rows
+        #: the parameter slots, each the same row after the element's first parameter
+        self.par_slots = par_slots
+        self.par_bases: list = []   # each instance's first parameter row (-1: none)
         self.aliases = [_alias_pattern(r, index, variables)
                         for r in ca.vertsplit(residuals)] if lhs else []
+        rel = self.relative
+        # the alias hints by path relative to an instance (".v"), and for the root
+        self.hints = [p if p[0] == "none" else
+                      ("pair", rel[p[1]], rel[p[2]], p[3]) if p[0] == "pair"
+                      else ("const", rel[p[1]], p[2]) for p in self.aliases]
+        self.root_hints = [h if h[0] == "none" else
+                           (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
+                           (h[0], h[1][1:], h[2]) for h in self.hints]
 
-    def add(self, flat: FlatModel, el, where: str) -> None:
+    def add(self, flat: FlatModel, el, where: str, ders=None) -> None:
+        """Add the instance ``el``; ``ders`` holds derivative symbols made beforehand
+        (`_template_derivatives`), by variable name."""
         syms = el._syms
         args = [syms[k] for k in self.keys]
         children = el._children
+        state = flat.__dict__
+        rows = state.get("_rows", {})
+        bases = self.bases
+        bases.append(rows.get(id(el), -1))
         for port, keys in self.ports:
-            psyms = children[port]._syms
-            args.extend(psyms[k] for k in keys)
-        der = flat.context.der_symbol
-        args.extend([der(args[i].name()) for i in self.derived])
+            port = children[port]
+            psyms = port._syms
+            args += [psyms[k] for k in keys]
+            bases.append(rows.get(id(port), -1))
+        owner = el._path_cache
+        if self.derived:
+            rel = self.relative
+            names = [owner + rel[i] for i in self.derived] if owner else \
+                [rel[i][1:] for i in self.derived]
+            ctx = flat.context
+            for name in names:
+                sym = ctx.derivative.get(name)
+                if sym is None:
+                    sym = ders.pop(name, None) if ders else None
+                    if sym is None:
+                        sym = ctx.der_symbol(name)
+                    else:                   # as der_symbol registers a new one
+                        key = f"der({name})"
+                        ctx.derivative[name] = sym
+                        ctx.integral[key] = name
+                        ctx.unknowns[key] = sym
+                args.append(sym)
         args.append(flat.context.time)
         self.instances.append(args)
-        self.paths.append(el.path)
-        owner = el.path
-        prefix = owner
-        rel = self.relative
-        hints = [p if p[0] == "none" else
-                 ("pair", prefix + rel[p[1]], prefix + rel[p[2]], p[3]) if p[0] == "pair"
-                 else ("const", prefix + rel[p[1]], p[2]) for p in self.aliases]
-        if not prefix:              # the root: paths without the leading dot
+        self.paths.append(owner)
+        if self.par_slots:
+            self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
+        if owner:
             hints = [h if h[0] == "none" else
-                     (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
-                     (h[0], h[1][1:], h[2]) for h in hints]
-        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hints[k])
-               for k in range(self.n_eq)]
+                     ("pair", owner + h[1], owner + h[2], h[3]) if h[0] == "pair"
+                     else ("const", owner + h[1], h[2]) for h in self.hints]
+        else:
+            hints = self.root_hints
+        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hint)
+               for k, hint in enumerate(hints)]
         self.equations.append(eqs)
-        flat.equations.extend(eqs)
+        flat.equations += eqs
 
     def instantiate(self, flat: FlatModel) -> None:
         """Every instance's residuals from one call of the mapped function."""
@@ -698,34 +902,45 @@ class _Template:
                 eq.residual = out[k]
                 k += 1
 
-
     def _columns(self, flat: FlatModel, n: int, width: int):
         """The instances' arguments as a ``width`` x ``n`` matrix; the variable slots are
-        sliced from the model's stacked variable symbols (`FlatModel.stack_variables`),
-        only the other slots (parameters, derivatives, time) are stacked here. None if a
-        variable slot is not a model variable (then the caller stacks every argument)."""
-        variables = flat.variables
-        slots = [i for i, name in enumerate(self.relative) if self.var_slots[i]]
-        if not slots:
+        taken from the model's stacked variable symbols (`FlatModel.stack_variables`) by
+        the rows of each instance's variables, recorded as they were bound; only the
+        other slots (parameters, derivatives, time) are stacked here. None if the rows
+        are not known (then the caller stacks every argument)."""
+        slots = [i for i in range(len(self.relative)) if self.var_slots[i]]
+        if not slots or self.var_rows is None:
             return None
+        bases = np.array(self.bases, dtype=np.int64).reshape(n, -1)
+        which = np.array([self.var_rows[i][0] for i in slots], dtype=np.int64)
+        offset = np.array([self.var_rows[i][1] for i in slots], dtype=np.int64)
+        if (bases[:, which] < 0).any():
+            return None
+        rows = (bases[:, which] + offset).ravel()
+        column = flat.stack_variables()
+        if rows.max() >= column.numel():
+            return None
+        var_part = ca.reshape(column[rows.tolist()], len(slots), n)
         others = [i for i in range(width) if i >= len(self.relative) or
                   not self.var_slots[i]]
-        names = []
-        rel = self.relative
-        for path, args in zip(self.paths, self.instances):
-            for i in slots:
-                name = path + rel[i] if path else rel[i][1:]
-                v = variables.get(name)
-                if v is None or v.sym is not args[i]:
-                    return None
-                names.append(name)
-        var_part = ca.reshape(flat.stack_variables(names), len(slots), n)
-        if others:
+        par_slots = list(self.par_slots)
+        par_bases = np.array(self.par_bases, dtype=np.int64)
+        parameters = flat.__dict__.get("_parameter_column")
+        if par_slots and parameters is not None and (par_bases >= 0).all():
+            # parameters by their rows, time as one row, only derivatives stacked
+            rows = (par_bases[:, None] + np.arange(len(par_slots))).ravel()
+            ders = [i for i in others if i not in par_slots and i != width - 1]
+            parts = [var_part, ca.reshape(parameters[rows.tolist()], len(par_slots), n)]
+            if ders:
+                parts.append(ca.reshape(ca.vertcat(
+                    *[args[i] for args in self.instances for i in ders]), len(ders), n))
+            parts.append(ca.repmat(flat.context.time, 1, n))
+            stacked = ca.vertcat(*parts)
+            order = slots + par_slots + ders + [width - 1]
+        else:
             rest = ca.vertcat(*[args[i] for args in self.instances for i in others])
             stacked = ca.vertcat(var_part, ca.reshape(rest, len(others), n))
-        else:
-            stacked = var_part
-        order = slots + others            # row r of stacked holds slot order[r]
+            order = slots + others          # row r of stacked holds slot order[r]
         position = [0] * width
         for r, i in enumerate(order):
             position[i] = r
@@ -792,7 +1007,7 @@ def _template(flat: FlatModel, el, templates: dict):
     """The `_Template` of ``el``'s class, built from ``el`` on first use; None if the
     class does not qualify (see `_Template`)."""
     cls = type(el)
-    if any(k not in _PLAIN_KEYS and k not in el._children for k in el.__dict__):
+    if el.__dict__.keys() - _PLAIN_KEYS - el._children.keys():
         return None                 # instance attributes: equations may differ
     if cls in templates:
         return templates[cls]
@@ -857,8 +1072,26 @@ def _template(flat: FlatModel, el, templates: dict):
         return None
     # a parameter bound to an expression of the parent's parameters (Resistor(R=R/2))
     # fills its slot with that expression
+    # the row of each variable slot after its element's first variable
+    var_rows = {}
+    own_vars = [p[0] for p in _declaration_plan(cls)[1]]
+    for i, k in enumerate(keys):
+        if k in own_vars:
+            var_rows[i] = (0, own_vars.index(k))
+    i = len(keys)
+    for j, (name, ks) in enumerate(ports):
+        port_vars = [p[0] for p in _declaration_plan(type(el._children[name]))[1]]
+        for k in ks:
+            var_rows[i] = (1 + j, port_vars.index(k))
+            i += 1
+    # parameter slots: the first keys, in the order of the class's parameters
+    par_keys = [p[0] for p in _declaration_plan(cls)[0]]
+    par_slots = tuple(i for i, k in enumerate(keys) if k in par_keys)
+    if [keys[i] for i in par_slots] != par_keys[:len(par_slots)] or \
+            list(par_slots) != list(range(len(par_slots))):
+        par_slots = ()                  # not laid out as bound: stacked one by one
     tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs,
-                    variables)
+                    variables, var_rows, par_slots)
     templates[cls] = tpl
     return tpl
 
@@ -911,25 +1144,6 @@ def _short(expr, limit: int = 80) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
-class _UnionFind:
-    def __init__(self):
-        self.parent: dict[int, int] = {}
-
-    def find(self, a: int) -> int:
-        self.parent.setdefault(a, a)
-        root = a
-        while self.parent[root] != root:
-            root = self.parent[root]
-        while self.parent[a] != root:
-            self.parent[a], a = root, self.parent[a]
-        return root
-
-    def union(self, a: int, b: int) -> None:
-        ra, rb = self.find(a), self.find(b)
-        if ra != rb:
-            self.parent[rb] = ra
-
-
 def _resolve(flat: FlatModel, port, sym_owner):
     """A Connector, a SignalRef, or a bound signal symbol -> Connector or SignalRef."""
     if isinstance(port, (Connector, SignalRef)):
@@ -949,9 +1163,8 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     the nodes they join (:mod:`mechatron.compiler.folding`)."""
     sym_owner: dict[str, SignalRef] = {}
     for el in elements:
-        for key, decl in type(el)._declarations.items():
-            if isinstance(decl, (Input, Output)):
-                sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
+        for key in _signal_keys(type(el)):
+            sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
     joined = []
     tried: set[tuple] = set()  # ports of a failed connect: not reported again as open
     if planned and _reaches_inside(connects, planned):
@@ -964,16 +1177,20 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
         for port in list(folded.values()):
             port._syms.unfold()
         planned = folded = None
+    port_types = (Connector, SignalRef)
     for con, writer in connects:
-        where = writer.path or flat.name
         resolved = []
         for p in con.ports:
-            r = _resolve(flat, p, sym_owner)
+            r = p if isinstance(p, port_types) else _resolve(flat, p, sym_owner)
             if r is None:
+                where = writer.path or flat.name
                 problems.append(f"{where}: connect() takes ports, got {p!r}. Pass a port "
                                 "such as r1.p or a signal such as src.y.")
                 continue
             resolved.append(r)
+        if len(resolved) == 2 and type(resolved[0]) is type(resolved[1]):
+            joined.append((writer, resolved))       # the common case, compatible
+            continue
         ok = [resolved[0]] if resolved else []
         for a, b in zip(resolved, resolved[1:]):
             msg = _compatible(a, b)
@@ -987,10 +1204,13 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     sets = connection_sets(joined)
     flow_sums: list = []
     for cset in sets:
-        flat.connection_sets.append([_set_member(m) for m in cset.members])
         if cset.is_signal:
+            flat.connection_sets.append([_set_member(m) for m in cset.members])
             _signal_set(flat, cset, problems, model)
-        elif not planned:
+            continue
+        flat.connection_sets.append([(m.path, type(m.port).domain, False)
+                                     for m in cset.members])     # as _set_member
+        if not planned:
             _physical_set(flat, cset, flow_sums)
     if planned:
         joining = join_planned(sets, planned, folded)
@@ -1001,10 +1221,29 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     else:
         nodes = [cset.members for cset in sets if not cset.is_signal]
     _flow_sums(flat, flow_sums)
-    connected = inside_connected(sets) | tried
-    wired_inside = {port_key(m.port) for s in sets for m in s.members if m.outside}
+    # what inside_connected(sets) | tried holds (port_key of each port connected from
+    # outside its component), connectors by id and signals by key; and the ports
+    # wired inside their own component
+    connected_ports: set[int] = set()
+    connected: set[tuple] = set()
+    wired_inside: set[tuple] = set()
+    for cset in sets:
+        for m in cset.members:
+            if m.outside:
+                wired_inside.add(port_key(m.port))
+            elif isinstance(m.port, SignalRef):
+                connected.add(port_key(m.port))
+            else:
+                connected_ports.add(id(m.port))
+    for key in tried:
+        if key[0] == "port":
+            connected_ports.add(key[1])
+        else:
+            connected.add(key)
     for el in elements:
-        if isinstance(el, Connector) and port_key(el) not in connected:
+        if isinstance(el, Connector):
+            if id(el) in connected_ports:
+                continue
             owner = el._parent
             if planned and (id(el) in folded or id(owner._parent) in planned):
                 continue            # folded, or wired inside a planned subsystem
@@ -1019,7 +1258,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
             problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
                             "or remove the component. "
                             f"{_hint(el)}".rstrip())
-        if isinstance(el, Component) and el is not model:  # the root's: external inputs
+        elif el is not model:       # a component; the root's inputs: external inputs
             for key in _input_keys(type(el)):
                 if port_key(SignalRef(el, key)) not in connected:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
@@ -1050,6 +1289,12 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     flat.folded = [FoldedPort(port.path, type(port), node[pid].path, flow[pid],
                               port._syms.position, port._syms.order)
                    for pid, port in folded.items()]
+
+
+@functools.lru_cache(maxsize=None)
+def _signal_keys(cls) -> tuple:
+    """The keys of a class's signal inputs and outputs, in declaration order."""
+    return tuple(k for k, d in cls._declarations.items() if isinstance(d, (Input, Output)))
 
 
 @functools.lru_cache(maxsize=None)
@@ -1160,22 +1405,30 @@ def _units_compatible(a: str, b: str) -> bool:
 
 def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
     members = cset.members
-    origin = "connect(" + ", ".join(m.path for m in members) + ")"
-    cls = type(members[0].port)
     first = members[0]
+    origin = "connect(" + ", ".join([m.path for m in members]) + ")"
+    across, through = _port_variables(type(first.port))
     ports = [m for m in members if m.port is not first.port]  # a port is one node
-    for a in cls.across_names():
+    aliases = flat.aliases
+    for a in across:
+        target = f"{first.path}.{a}"
         for m in ports:
-            flat.aliases.append((f"{m.path}.{a}", f"{first.path}.{a}", 1.0, origin))
-    for t in cls.through_names():
+            aliases.append((f"{m.path}.{a}", target, 1.0, origin))
+    for t in through:
         if len(members) == 2 and ports:
             # first.sign * first.t + m.sign * m.t == 0
             m = ports[0]
-            flat.aliases.append((f"{m.path}.{t}", f"{first.path}.{t}",
-                                 -first.sign * m.sign, origin))
+            aliases.append((f"{m.path}.{t}", f"{first.path}.{t}",
+                            -first.sign * m.sign, origin))
         else:   # formed in bulk by _flow_sums
             flow_sums.append(([(f"{m.path}.{t}", m.sign) for m in members],
                               f"{origin}: sum of {t} == 0"))
+
+
+@functools.lru_cache(maxsize=None)
+def _port_variables(cls) -> tuple:
+    """A connector class's across and through keys (once per class)."""
+    return tuple(cls.across_names()), tuple(cls.through_names())
 
 
 def _flow_sums(flat: FlatModel, flow_sums) -> None:
@@ -1197,33 +1450,61 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
         flat.equations.append(FlatEquation(residual, origin))
 
 
+_DOMAINS: dict = {}
+
+
+@functools.lru_cache(maxsize=None)
+def _domain_id(cls) -> int:
+    """A number for a connector class's domain, equal for equal domains (a domain is
+    compared by value), worked out once per class."""
+    return id(_DOMAINS.setdefault(cls.domain, cls.domain))
+
+
 def _check_references(flat, model, elements, nodes, problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
     the ports of each physical node ``nodes`` (lists of members; a subsystem's port is one
     node inside and outside) and the ports of one domain on each component."""
-    net = _UnionFind()
-    for members in nodes:
-        ids = [id(m.port) for m in members]
-        for i in ids[1:]:
-            net.union(ids[0], i)
+    index: dict[int, int] = {}          # id(port) -> its number, in tree order
+    parent: list[int] = []              # union-find over the numbers
+
+    def find(a: int) -> int:
+        root = a
+        while parent[root] != root:
+            root = parent[root]
+        while parent[a] != root:
+            parent[a], a = root, parent[a]
+        return root
+
     for el in elements:
         if not isinstance(el, Component):
             continue
-        first: dict[object, int] = {}     # domain -> the first port of it on el
+        first: dict[int, int] = {}     # domain -> the first port of it on el
         for port in el._children.values():
             if isinstance(port, Connector):
-                i = first.setdefault(type(port).domain, id(port))
-                if i != id(port):
-                    net.union(i, id(port))
+                k = index[id(port)] = len(parent)
+                i = first.setdefault(_domain_id(type(port)), k)
+                parent.append(i)        # joined to the first port of its domain
+    for members in nodes:
+        ra = None
+        for m in members:
+            k = index.get(id(m.port))
+            if k is None:               # not a port of a component: a network of its own
+                k = index[id(m.port)] = len(parent)
+                parent.append(k)
+            rb = find(k)
+            if ra is None:
+                ra = rb
+            elif rb != ra:
+                parent[rb] = ra
     networks: dict[int, list[Connector]] = {}
     grounded: set[int] = set()
-    for members in nodes:
-        for m in members:
-            port = m.port
-            root = net.find(id(port))
-            networks.setdefault(root, []).append(port)
-            if port._parent is not None and port._parent._reference:
-                grounded.add(root)
+    for members in nodes:               # a node's members share their network
+        root = find(index[id(members[0].port)])
+        ports = [m.port for m in members]
+        networks.setdefault(root, []).extend(ports)
+        if root not in grounded and any(
+                p._parent is not None and p._parent._reference for p in ports):
+            grounded.add(root)
     for root, plist in networks.items():
         domain = type(plist[0]).domain
         if root in grounded or domain is None or not domain.needs_reference:
@@ -1249,7 +1530,8 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     anywhere is a discrete Real (its ``der(v) == 0`` was added by ``_discrete_states``).
     """
     ctx = flat.context
-    for eq in flat.equations:
+    # the equations der(v) == 0 of `_discrete_states`, which only event actions add
+    for eq in flat.equations if flat.events else ():
         if isinstance(eq.origin, str) and eq.origin.endswith("changed only by events)"):
             name = ctx.integral.get(eq.residual.name()) if eq.residual.is_symbolic() else None
             if name:
@@ -1268,7 +1550,7 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
                     "(discrete variable, changed only by events)", el.path))
             flat.discrete[sym_name] = decl.discrete_kind
     for el in elements:
-        if not isinstance(el, Component):
+        if not isinstance(el, Component) or not _own_methods(type(el), "initial_equations"):
             continue
         for klass, items in _class_calls(el, "initial_equations", el.path):
             for k, item in enumerate(_as_equations(items)):

@@ -82,10 +82,13 @@ def connection_sets(connections) -> list[ConnectionSet]:
     component that wrote a ``connect`` and the resolved ports it joins (Connectors or
     SignalRefs). Members are ordered by path within a set, sets by their first member, so
     that the result does not depend on the order the connects were written in."""
-    parent: dict[tuple, tuple] = {}
-    members: dict[tuple, Member] = {}
+    # each element by number; a connector's key is (id, side), a signal's its port_key
+    # with the side (as port_key, without building a tuple per connector)
+    number: dict = {}
+    members: list[Member] = []
+    parent: list[int] = []
 
-    def find(a):
+    def find(a: int) -> int:
         root = a
         while parent[root] != root:
             root = parent[root]
@@ -94,21 +97,28 @@ def connection_sets(connections) -> list[ConnectionSet]:
         return root
 
     for writer, ports in connections:
-        keys = []
+        first = None
         for port in ports:
-            outside = _is_own(port, writer)
-            key = (port_key(port), outside)
-            if key not in members:
-                members[key] = Member(port, outside)
-                parent[key] = key
-            keys.append(key)
-        for a, b in zip(keys, keys[1:]):
-            ra, rb = find(a), find(b)
-            if ra != rb:
-                parent[rb] = ra
-    groups: dict[tuple, list[Member]] = {}
-    for key, member in members.items():
-        groups.setdefault(find(key), []).append(member)
+            if isinstance(port, SignalRef):
+                outside = port.owner is writer
+                key = ("signal", id(port.owner), port.name, outside)
+            else:
+                outside = port._parent is writer
+                key = (id(port), outside)
+            k = number.get(key)
+            if k is None:
+                k = number[key] = len(members)
+                members.append(Member(port, outside))
+                parent.append(k)
+            if first is None:
+                first = find(k)
+            else:
+                root = find(k)
+                if root != first:
+                    parent[root] = first
+    groups: dict[int, list[Member]] = {}
+    for k, member in enumerate(members):
+        groups.setdefault(find(k), []).append(member)
     sets = [ConnectionSet(sorted(g, key=_order)) for g in groups.values()]
     sets.sort(key=lambda s: _order(s.members[0]))
     return sets

@@ -46,10 +46,11 @@ class BuildContext:
     def der_symbol(self, name: str) -> ca.SX:
         sym = self.derivative.get(name)
         if sym is None:
-            sym = ca.SX.sym(f"der({name})")
+            key = f"der({name})"            # the symbol's name
+            sym = ca.SX.sym(key)
             self.derivative[name] = sym
-            self.integral[sym.name()] = name
-            self.unknowns[sym.name()] = sym
+            self.integral[key] = name
+            self.unknowns[key] = sym
         return sym
 
     def __enter__(self):

@@ -1,0 +1,122 @@
+"""Symbols made in bulk while flattening (`compiler/flatten.py`): a column of symbols
+named by instance path read from CasADi's serialized form, the variables' records made
+from it, and the rows that templates read their instances' slots by. Checked against
+symbols made one by one with ``casadi.SX.sym`` and against the model's own records."""
+
+import casadi as ca
+import pytest
+
+import mechatron as mt
+import mechatron.compiler.flatten as fl
+from mechatron.library import electrical as el
+
+from tests.compiler.test_folding import reading_model
+from tests.compiler.test_hierarchy import Pair
+
+
+NAMES = ["r1.p.v", "a.b", "x", "der_like(x)", "sub[3].v", "a" * 300, "m.r12.n.i",
+         "pre(v)", "s.p.v", "s.n.i", "top"]
+
+
+def test_bulk_symbols_carry_the_given_names_in_order():
+    assert fl._bulk_ok(), "the serialized layout differs from this CasADi's"
+    column, syms = fl._symbols(NAMES)
+    assert column.shape == (len(NAMES), 1)
+    assert [s.name() for s in syms] == NAMES
+    assert all(s.is_symbolic() and s.is_scalar() for s in syms)
+    # distinct symbols, and the column is made of exactly those
+    assert len(ca.symvar(column)) == len(NAMES)
+    assert all(ca.is_equal(column[k], s) for k, s in enumerate(syms))
+    # the same serialized text CasADi writes for symbols made one by one
+    one_by_one = ca.vertcat(*[ca.SX.sym(n) for n in NAMES])
+    assert fl._serialized_column(NAMES) == one_by_one.serialize()
+
+
+def test_non_ascii_names_and_small_or_empty_columns():
+    names = ["\u00e9t\u00e9.v", "\u03c9.w", "plain"] * 4
+    column, syms = fl._symbols(names)
+    assert [s.name() for s in syms] == names
+    column, syms = fl._symbols(["one", "two"])           # made one by one
+    assert [s.name() for s in syms] == ["one", "two"]
+    column, syms = fl._symbols([])
+    assert column.shape == (0, 1) and syms == []
+
+
+def test_a_changed_layout_falls_back_to_one_symbol_per_call(monkeypatch):
+    monkeypatch.setattr(fl, "_BULK", [False])
+    column, syms = fl._symbols(NAMES)
+    assert [s.name() for s in syms] == NAMES
+    assert all(ca.is_equal(column[k], s) for k, s in enumerate(syms))
+
+
+def nested_model():
+    """Two levels of subsystems with parameters passed on as expressions, a start value,
+    and a part whose parameter is an expression of its parent's."""
+    class Halves(mt.Component):
+        R = mt.Parameter("Ohm", default=2.0, min=0, doc="Total resistance")
+        p = el.Pin(doc="Input")
+        n = el.Pin(doc="Output")
+        a = el.Resistor(R=R / 2)
+        b = el.Resistor(R=R / 2)
+
+        def equations(self):
+            return [mt.connect(self.p, self.a.p), mt.connect(self.a.n, self.b.p),
+                    mt.connect(self.b.n, self.n)]
+
+    m = mt.System("nested")
+    src = m.add("src", el.DCVoltageSource(V=2.0))
+    g = m.add("g", el.ElectricalReference())
+    pair = m.add("pair", Pair(R=3.0, C=1e-3))
+    h = m.add("h", Halves(R=4.0))
+    c = m.add("c", el.Capacitor(C=1e-3, v=mt.Start(0.5, "high")))
+    m.connect(src.n, g.port, pair.gnd, c.n)
+    m.connect(src.p, pair.p)
+    m.connect(pair.n, h.p)
+    m.connect(h.n, c.p)
+    return m
+
+
+@pytest.mark.parametrize("build", [nested_model, reading_model])
+def test_every_symbol_is_named_by_its_path_and_stacked_in_declaration_order(build):
+    flat = fl.flatten(build())
+    for name, v in flat.variables.items():
+        assert v.sym.name() == name
+        assert flat.context.unknowns[name] is v.sym
+    for name, p in flat.parameters.items():
+        assert p.sym.name() == name
+    column = flat.stack_variables()
+    syms = [v.sym for v in flat.variables.values()]
+    assert column.shape == (len(syms), 1)
+    assert all(ca.is_equal(column[k], s) for k, s in enumerate(syms))
+    some = list(flat.variables)[::3]
+    picked = flat.stack_variables(some)
+    assert all(ca.is_equal(picked[k], flat.variables[n].sym) for k, n in enumerate(some))
+
+
+def test_values_starts_and_bound_parameters_are_read_as_given():
+    flat = fl.flatten(nested_model())
+    assert flat.variables["c.v"].start == 0.5
+    assert flat.variables["c.v"].priority == "high"
+    assert flat.parameters["pair.R"].value == 3.0
+    # parts bound to their parent's parameters are not slots of their own
+    assert "h.a.R" in flat.bound_parameters and "h.a.R" not in flat.parameters
+    assert flat.bound_parameters["h.a.R"].value == 2.0
+    # the resistor's law v == R*i over the bound expression R/2 of h.R
+    syms = [flat.variables["h.a.v"].sym, flat.variables["h.a.i"].sym,
+            flat.parameters["h.R"].sym]
+    law = [eq.residual for eq in flat.equations if eq.owner == "h.a" and
+           {s.name() for s in ca.symvar(eq.residual)} == {"h.a.v", "h.a.i", "h.R"}]
+    assert len(law) == 1
+    f = ca.Function("f", syms, law)
+    assert float(f(3.0, 1.5, 4.0)) == 0.0          # 3 V = (4/2 Ohm)(1.5 A)
+    assert float(f(3.0, 1.0, 4.0)) == pytest.approx(1.0)    # 3 V - 2 V
+
+
+def test_the_compiled_nested_model_follows_its_circuit():
+    """Source 2 V, four resistors in series (1.5 + 1.5 + 2 + 2 Ohm via the pair's two
+    stages and the halves), the pair's capacitors and the last capacitor: at steady
+    state no current flows, so every capacitor sits at the source voltage."""
+    res = mt.simulate(nested_model(), 5.0)
+    assert res.final("c.v") == pytest.approx(2.0, abs=1e-6)
+    assert res.final("pair.first.c.v") == pytest.approx(2.0, abs=1e-6)
+    assert res.final("pair.second.c.v") == pytest.approx(2.0, abs=1e-6)
