@@ -218,7 +218,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     n_ini = len(ini)
     # the derivatives and the residuals ride along as one column each (converted from
     # Python once), the logged variables as one column, last
-    ode_col = ca.vertcat(*low.ode) if n_ode else ca.SX(0, 1)
+    ode_col = low.ode_col if n_ode else ca.SX(0, 1)
     res_col = ca.vertcat(*low.residuals) if n_res else ca.SX(0, 1)
     n_dist = 2
     pile = [ode_col, res_col] + dists + ini + plan.exprs + [out_col]
@@ -245,7 +245,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         dist[k] = d_clock
 
     t = ctx.time
-    x = ca.vertcat(*low.state_syms) if low.state_syms else ca.SX(0, 1)
+    x = low.state_col if low.state_syms else ca.SX(0, 1)
     X = ca.vertcat(x, modes, counters, tlast)
     z = ca.vertcat(*low.alg_syms) if low.alg_syms else ca.SX(0, 1)
     nr = len(relations)
@@ -278,7 +278,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                                ca.event_in()[:5], ["post_x", "post_z"])
     f_events = ca.Function("events", args, [events.step_events(
         f_dist2, t, x, modes, counters, tlast, z, p) if nr else X], argn, ["post_x"])
-    f_init = _initial_function(flat, ini, args, argn, ca.vertcat(*low.state_syms, z, p, t)
+    f_init = _initial_function(flat, ini, args, argn, ca.vertcat(x, z, p, t)
                                if n_ini else None)
     scales = ca.vertcat(*flat.time_scales) if flat.time_scales else ca.SX(0, 1)
     f_scales = ca.Function("scales", [p], [scales], ["p"], ["scales"])

@@ -44,6 +44,8 @@ class Lowered:
     n_torn: int = 0
     n_equations: int = 0
     n_unknowns: int = 0
+    state_col: ca.SX | None = None   # state_syms and ode stacked (taken from the stacked
+    ode_col: ca.SX | None = None     # unknowns when they are there: no vertcat of scalars)
 
 
 _SAMPLED_PATTERN_ROWS = 250_000   # from this many equations on, see _pattern
@@ -372,6 +374,11 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         out.assigned_expr = ca.vertcat(bulk_expr, *exprs)[at]
     for v in states:
         out.ode.append(var_syms[var_to_diff[v]])
+    ders = [var_to_diff[v] for v in states]
+    out.state_col, out.ode_col = (
+        var_vec[rows] if res and (not rows or max(rows) < var_vec.numel())
+        else (ca.vertcat(*[var_syms[v] for v in rows]) if rows else ca.SX(0, 1))
+        for rows in (states, ders))
     return out
 
 
