@@ -180,7 +180,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     lap("relations")
 
     variables = flat.variables
-    syms = {n: variables[n].sym for n in alias.unknowns}
+    syms = [variables[n].sym for n in alias.unknowns]     # in the order of the unknowns
     p_value = _OnDemand(lambda: {q.sym.name(): q.value for q in params})
 
     def start_guess(free):
@@ -293,12 +293,11 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
             val, prio, _ = alias.starts[base]
         state_starts.append(val)
         state_prior.append(prio)
-    name_index = {n: i for i, n in enumerate(names)}
     state_set = set(low.states)
-    targets = []
-    for rep, (val, prio, given) in alias.starts.items():
-        if rep not in state_set and prio in ("high", "low"):
-            targets.append((given, name_index[rep], val, prio))
+    wanted = [(rep, val, prio, given) for rep, (val, prio, given) in alias.starts.items()
+              if rep not in state_set and prio in ("high", "low")]
+    name_index = {n: i for i, n in enumerate(names)} if wanted else {}
+    targets = [(given, name_index[rep], val, prio) for rep, val, prio, given in wanted]
     z_start = np.array([_guess(flat, alias, n) if n in flat.variables else 0.0
                         for n in low.alg], dtype=float)
     report = {

@@ -88,7 +88,7 @@ class _Singular(StructuralError):
 
 
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
-          syms: dict[str, ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
+          syms: dict[str, ca.SX] | list[ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
           start_guess, hints: dict[str, str],
           preference: dict[str, float] | None = None,
           declared: dict[str, int] | None = None,
@@ -104,8 +104,9 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     residuals, origins
         Equations (after alias elimination) and where each came from.
     unknowns
-        Names of the unknowns (alias representatives); ``syms`` maps names to symbols and
-        ``derivative`` names to derivative symbols.
+        Names of the unknowns (alias representatives); ``syms`` maps names to symbols
+        (or lists them in the order of ``unknowns``) and ``derivative`` names to
+        derivative symbols.
     start_guess : callable
         ``start_guess(list_of_syms) -> ndarray``, numeric point for Jacobian-based choices.
     hints
@@ -170,7 +171,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
            preference, declared, roles, classes, physical, parameters,
            stacked=None) -> Lowered:
     # -- variables of the structural problem: unknowns and their derivatives -------------
-    var_syms: list[ca.SX] = [syms[n] for n in unknowns]
+    var_syms: list[ca.SX] = list(syms) if isinstance(syms, list) else \
+        [syms[n] for n in unknowns]
     var_names: list[str] = list(unknowns)
     var_to_diff = [-1] * len(var_syms)
     for i, n in enumerate(unknowns):
