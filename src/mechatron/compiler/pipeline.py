@@ -92,32 +92,33 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     constant = np.zeros(n + len(folded))
     constant[var_row[~kept]] = scale[~kept]
     if folded:
+        # the folded variables' rows among the model's, then their terms in bulk
+        n_f = len(folded)
+        at = np.minimum(position, n) + np.arange(n_f)
+        is_folded = np.zeros(n + n_f, dtype=bool)
+        is_folded[at] = True
+        merged = []
+        for own, extra in ((names, [f[0] for f in folded]), (units, [f[1] for f in folded]),
+                           (docs, [f[2] for f in folded])):
+            out = np.empty(n + n_f, dtype=object)
+            out[at] = extra
+            out[~is_folded] = own
+            merged.append(out.tolist())
         index = {name: k for k, name in enumerate(names)}
-        out_names, out_units, out_docs, start = [], [], [], 0
-        for k, (name, unit, doc, at, terms) in enumerate(folded):
-            at = min(at, n)
-            out_names += names[start:at]
-            out_units += units[start:at]
-            out_docs += docs[start:at]
-            start = at
-            out_names.append(name)
-            out_units.append(unit)
-            out_docs.append(doc)
-            r = k + at
-            entries: dict[int, float] = {}      # terms of one representative add up
-            for term, c in terms:
-                j = index[term]
-                if rep[j] < 0:
-                    constant[r] += c * scale[j]
-                else:
-                    entries[int(rep[j])] = entries.get(int(rep[j]), 0.0) + \
-                        c * float(scale[j])
-            rows += [r] * len(entries)
-            cols += entries
-            vals += entries.values()
-        names = out_names + names[start:]
-        units = out_units + units[start:]
-        docs = out_docs + docs[start:]
+        t_row = np.repeat(at, [len(f[4]) for f in folded])
+        t_var = np.array([index[term] for f in folded for term, _ in f[4]], dtype=np.intp)
+        t_coef = np.array([c for f in folded for _, c in f[4]], dtype=float) * scale[t_var]
+        t_rep = rep[t_var]
+        gone = t_rep < 0
+        np.add.at(constant, t_row[gone], t_coef[gone])
+        # the terms of one representative add up (a triplet keeps one entry per place)
+        key = t_row[~gone].astype(np.int64) * max(n, 1) + t_rep[~gone]
+        uniq, inverse = np.unique(key, return_inverse=True)
+        sums = np.bincount(inverse, weights=t_coef[~gone], minlength=uniq.size)
+        rows += (uniq // max(n, 1)).tolist()
+        cols += (uniq % max(n, 1)).tolist()
+        vals += sums.tolist()
+        names, units, docs = merged
     M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), n)
     column = ca.mtimes(M, flat.stack_variables())
     nonzero = np.flatnonzero(constant)
