@@ -13,41 +13,12 @@ import mechatron as mt
 import mechatron.compiler.flatten as fl
 from mechatron.compiler.alias import eliminate_aliases
 from mechatron.library import electrical as el
-from mechatron.library import rotational as rot
+from tests.compiler import test_flatten_templates as templates
+from tests.compiler.test_flatten_templates import drive
 
 
-def ladder(n: int = 4) -> mt.System:
-    m = mt.System("ladder")
-    src = m.add("src", el.DCVoltageSource(V=1.0))
-    g = m.add("g", el.ElectricalReference())
-    m.connect(src.n, g.port)
-    node = src.p
-    for k in range(n):
-        r = m.add(f"r{k}", el.Resistor(R=1.0 + k))
-        c = m.add(f"c{k}", el.Capacitor(C=1e-3 * (k + 1)))
-        ind = m.add(f"l{k}", el.Inductor(L=1e-3))
-        m.connect(node, r.p)
-        m.connect(r.n, ind.p)
-        m.connect(ind.n, c.p)
-        m.connect(c.n, g.port)
-        node = c.p
-    return m
-
-
-def drive() -> mt.System:
-    m = mt.System("drive")
-    ref = m.add("ref", rot.RotationalReference())
-    src = m.add("src", rot.ConstantTorque(T=1.0))
-    m.connect(ref.port, src.B)
-    prev = src.A
-    for k in range(3):
-        j = m.add(f"j{k}", rot.Inertia(J=0.1 * (k + 1)))
-        s = m.add(f"s{k}", rot.RotationalSpring(k=10.0))
-        d = m.add(f"d{k}", rot.RotationalDamper(D=0.5))
-        m.connect(prev, j.port, s.A, d.A)
-        m.connect(s.B, d.B, ref.port)
-        prev = j.port
-    return m
+def ladder() -> mt.System:
+    return templates.ladder(4)
 
 
 def _point(flat, rng):

@@ -16,7 +16,7 @@ import numpy as np
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
-from mechatron.core.connections import connection_sets, is_driver, port_key
+from mechatron.core.connections import connection_sets, is_driver, port_key, root_of
 from mechatron.core.context import BuildContext
 from mechatron.core.declarations import (Across, Discrete, Input, Output, Parameter,
                                          ParameterExpression, Start, Through, Variable)
@@ -1467,14 +1467,6 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
     index: dict[int, int] = {}          # id(port) -> its number, in tree order
     parent: list[int] = []              # union-find over the numbers
 
-    def find(a: int) -> int:
-        root = a
-        while parent[root] != root:
-            root = parent[root]
-        while parent[a] != root:
-            parent[a], a = root, parent[a]
-        return root
-
     for el in elements:
         if not isinstance(el, Component):
             continue
@@ -1491,7 +1483,7 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
             if k is None:               # not a port of a component: a network of its own
                 k = index[id(m.port)] = len(parent)
                 parent.append(k)
-            rb = find(k)
+            rb = root_of(parent, k)
             if ra is None:
                 ra = rb
             elif rb != ra:
@@ -1499,7 +1491,7 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
     networks: dict[int, list[Connector]] = {}
     grounded: set[int] = set()
     for members in nodes:               # a node's members share their network
-        root = find(index[id(members[0].port)])
+        root = root_of(parent, index[id(members[0].port)])
         ports = [m.port for m in members]
         networks.setdefault(root, []).extend(ports)
         if root not in grounded and any(

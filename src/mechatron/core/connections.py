@@ -29,6 +29,17 @@ __all__ = ["Member", "ConnectionSet", "connection_sets", "is_driver", "port_key"
            "inside_connected"]
 
 
+def root_of(parent: list[int], a: int) -> int:
+    """The root of ``a`` in the union-find forest ``parent`` (``parent[r] == r`` at a
+    root), compressing the path on the way."""
+    root = a
+    while parent[root] != root:
+        root = parent[root]
+    while parent[a] != root:
+        parent[a], a = root, parent[a]
+    return root
+
+
 class Member:
     """One element of a connection set: a port (a Connector or a SignalRef), whether it
     is an outside connector of the component that wrote the connect, and its path."""
@@ -88,14 +99,6 @@ def connection_sets(connections) -> list[ConnectionSet]:
     members: list[Member] = []
     parent: list[int] = []
 
-    def find(a: int) -> int:
-        root = a
-        while parent[root] != root:
-            root = parent[root]
-        while parent[a] != root:
-            parent[a], a = root, parent[a]
-        return root
-
     for writer, ports in connections:
         first = None
         for port in ports:
@@ -111,14 +114,14 @@ def connection_sets(connections) -> list[ConnectionSet]:
                 members.append(Member(port, outside))
                 parent.append(k)
             if first is None:
-                first = find(k)
+                first = root_of(parent, k)
             else:
-                root = find(k)
+                root = root_of(parent, k)
                 if root != first:
                     parent[root] = first
     groups: dict[int, list[Member]] = {}
     for k, member in enumerate(members):
-        groups.setdefault(find(k), []).append(member)
+        groups.setdefault(root_of(parent, k), []).append(member)
     sets = [ConnectionSet(sorted(g, key=_order)) for g in groups.values()]
     sets.sort(key=lambda s: _order(s.members[0]))
     return sets
