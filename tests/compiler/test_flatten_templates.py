@@ -132,3 +132,45 @@ def test_a_dimension_error_in_a_class_used_twice_names_an_instance():
     with pytest.raises(UnitError, match=r"WrongInductor 'a': v == \(L\*i\): the left side "
                                         r"is V .*Is a der\(\) missing\?"):
         mt.compile_model(m)
+
+
+class Branch(mt.Component):
+    """A resistor passed its parent's parameter unchanged, from p to n."""
+
+    R = mt.Parameter("Ohm", default=1.0, doc="Resistance")
+    p = el.Pin(doc="Top")
+    n = el.Pin(doc="Bottom")
+    a = el.Resistor(R=R)
+
+    def equations(self):
+        return [mt.connect(self.p, self.a.p), mt.connect(self.a.n, self.n)]
+
+
+def test_parameters_passed_on_unchanged_reach_each_instance(monkeypatch):
+    """Parts whose parameter is their parent's (``R=R``) are instantiated from the
+    template with the parent's symbol (its row in the parameter column): each branch
+    carries V/R, also after a parameter change at run time, and the residuals are those
+    of flattening without templates."""
+    def build():
+        m = mt.System("branches")
+        src = m.add("src", el.DCVoltageSource(V=6.0))
+        g = m.add("g", el.ElectricalReference())
+        m.connect(src.n, g.port)
+        for k, r in enumerate((1.0, 2.0, 3.0)):
+            s = m.add(f"s{k}", Branch(R=r))
+            m.connect(src.p, s.p)
+            m.connect(s.n, g.port)
+        return m
+    flat = fl.flatten(build())
+    template = next(e.origin.template for e in flat.equations
+                    if e.owner == "s0.a" and hasattr(e.origin, "template"))
+    # every instance's resistance is a row of the parameter column: its branch's
+    column = flat.__dict__["_parameter_column"]
+    assert [[column[r].name() for r in b] for b in template.par_bases] == \
+        [["s0.R"], ["s1.R"], ["s2.R"]]
+    res = mt.simulate(build(), 0.01, params={"s1.R": 4.0})
+    for k, r in enumerate((1.0, 4.0, 3.0)):
+        np.testing.assert_allclose(res[f"s{k}.a.i"], 6.0 / r, rtol=1e-12)
+    with_templates, without = flat_both(build, monkeypatch)
+    assert [str(e.residual) for e in with_templates.equations] == \
+        [str(e.residual) for e in without.equations]

@@ -347,7 +347,9 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         bound.append((el, params, plain, var_keys))
     par_column, par_syms = _symbols(par_names)
     flat.__dict__["_parameter_column"] = par_column
-    par_rows = flat.__dict__["_parameter_rows"] = {}    # id -> first row, if all plain
+    # id -> the row of each parameter in the column, in declaration order: its own, or
+    # for a parameter passed on unchanged (R=R) its parent's; -1 for an expression
+    par_rows = flat.__dict__["_parameter_rows"] = {}
     var_column, var_syms = _symbols(var_names)
     records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint,
                             select)
@@ -363,8 +365,8 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             syms = {}
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner._path_cache if owner is not None else ""
-            par_rows[id(el)] = pi
-            for key, decl in params:
+            el_rows = par_rows[id(el)] = list(range(pi, pi + len(params)))
+            for j, (key, decl) in enumerate(params):
                 path = par_names[pi]
                 sym = par_syms[pi]
                 pi += 1
@@ -372,7 +374,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 if isinstance(raw, ParameterExpression):
                     syms[key], own_values[key] = _bind_expression(
                         flat, el, key, decl, raw, values, problems)
-                    par_rows[id(el)] = -1       # an expression: not a row of the column
+                    el_rows[j] = _passed_row(el, decl, raw, par_rows)
                     continue
                 syms[key] = sym
                 value = float("nan")
@@ -415,6 +417,19 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     if not base and len(variables) == len(var_names):   # the column holds them all
         flat.__dict__["_variable_stack"] = (len(var_names), var_column,
                                             dict(zip(var_names, range(len(var_names)))))
+
+
+def _passed_row(el, decl, raw, par_rows) -> int:
+    """The row in the parameter column of a parameter bound to a parameter of its parent
+    unchanged (``R=R``: the same symbol), or -1 (an expression, or a problem)."""
+    parent = el._parent
+    rows = par_rows.get(id(parent)) if parent is not None else None
+    if rows is None:
+        return -1
+    missing, message, name = _binding_check(raw, type(parent), decl.unit)
+    if missing or message or name is None:
+        return -1
+    return rows[_binding_plan(type(parent))[2].index(name)]
 
 
 def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None:
@@ -824,7 +839,7 @@ class _Template:
         self.var_rows = var_rows
         #: the parameter slots, each the same row after the element's first parameter
         self.par_slots = par_slots
-        self.par_bases: list = []   # each instance's first parameter row (-1: none)
+        self.par_bases: list = []   # each instance's parameter rows (-1: not known)
         self.aliases = [_alias_pattern(r, index, variables)
                         for r in ca.vertsplit(residuals)] if lhs else []
         rel = self.relative
@@ -924,11 +939,14 @@ class _Template:
         others = [i for i in range(width) if i >= len(self.relative) or
                   not self.var_slots[i]]
         par_slots = list(self.par_slots)
-        par_bases = np.array(self.par_bases, dtype=np.int64)
+        k = len(par_slots)
         parameters = flat.__dict__.get("_parameter_column")
-        if par_slots and parameters is not None and (par_bases >= 0).all():
+        par_rows = None
+        if k and parameters is not None and all(isinstance(b, list) for b in self.par_bases):
+            par_rows = np.array([b[:k] for b in self.par_bases], dtype=np.int64)
+        if par_rows is not None and (par_rows >= 0).all():
             # parameters by their rows, time as one row, only derivatives stacked
-            rows = (par_bases[:, None] + np.arange(len(par_slots))).ravel()
+            rows = par_rows.ravel()
             ders = [i for i in others if i not in par_slots and i != width - 1]
             parts = [var_part, ca.reshape(parameters[rows.tolist()], len(par_slots), n)]
             if ders:
