@@ -262,8 +262,11 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     if cached is not None:
         return cached
     held = held_states(cm) if plugin == "rosenbrock" else []
-    # MX passes input tables as blocks, not elements, and can hide held states from AD
-    S = ca.MX if drive or held else ca.SX
+    # the linear form: A's nonzeros follow the parameters (see integrate_variable)
+    form = linear_form(cm) if key[-1] else None
+    # MX passes input tables as blocks, not elements, can hide held states from AD and
+    # multiplies a sparse matrix in one kernel
+    S = ca.MX if drive or held or form is not None else ca.SX
     tau = S.sym("t")
     # SUNDIALS needs at least one state: a model of algebraic equations only gets a
     # constant dummy state (dropped again by integrate_variable)
@@ -273,11 +276,6 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     Xd = _hide(X, held) if held else X     # X as the step's Jacobian sees it
     z = S.sym("z", cm.nz)
     n_p = cm.p0.size + 2 * sum(n for _, n in drive)
-    form = linear_form(cm) if key[-1] else None
-    if form is not None:      # A's nonzeros follow the parameters (see integrate_variable)
-        S = ca.MX
-        tau, Xi, z = S.sym("t"), S.sym("X", cm.nX), S.sym("z", 0)
-        X = Xi
     n_a = form.sparsity.nnz() if form is not None else 0
     p = S.sym("p", n_p + n_a + (1 if shifted else 0))
     t = tau + p[n_p + n_a] if shifted else tau      # the model's time
