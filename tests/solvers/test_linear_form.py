@@ -15,8 +15,8 @@ import mechatron as mt
 from mechatron.library import electrical as el
 from mechatron.library import translational as tr
 from mechatron.solvers import variable
-from tests.solvers.test_logging import C, R, V, ladder
-from tests.solvers.test_segments import ImplicitLoad, exact_voltages, ladder_matrix, voltages
+from tests.solvers.test_logging import C, R, V, exact_voltages, ladder, ladder_matrix
+from tests.solvers.test_segments import ImplicitLoad, voltages
 
 TIGHT = {"rtol": 1e-10, "atol": 1e-12}
 N = 30

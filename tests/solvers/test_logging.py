@@ -36,14 +36,20 @@ def ladder(n: int) -> mt.System:
     return m
 
 
-def exact_voltages(n: int, t: np.ndarray) -> np.ndarray:
-    """Capacitor voltages of the ladder from rest: ``v' = A v + b``, by expm."""
-    g = 1.0 / (R * C)
+def ladder_matrix(n: int, r: float = R) -> tuple[np.ndarray, np.ndarray]:
+    """``v' = A v + b`` of the ladder with every resistor ``r``."""
+    g = 1.0 / (r * C)
     A = np.diag(np.full(n, -2.0 * g)) + np.diag(np.full(n - 1, g), 1) \
         + np.diag(np.full(n - 1, g), -1)
     A[-1, -1] = -g
     b = np.zeros(n)
     b[0] = g * V
+    return A, b
+
+
+def exact_voltages(n: int, t: np.ndarray) -> np.ndarray:
+    """Capacitor voltages of the ladder from rest: ``v' = A v + b``, by expm."""
+    A, b = ladder_matrix(n)
     v_inf = np.linalg.solve(A, -b)
     return np.array([v_inf - expm(A * tk) @ v_inf for tk in t]).T
 

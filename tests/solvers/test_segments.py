@@ -12,33 +12,15 @@ matrix exponential of the ladder, the closed-form response of an RC to a sine, S
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from scipy.linalg import expm
 from scipy.optimize import brentq
 
 import mechatron as mt
 from mechatron.library import electrical as el
 from mechatron.solvers import variable
 
-from tests.solvers.test_logging import C, R, V, ladder  # noqa: F401 (the same ladder)
+from tests.solvers.test_logging import C, R, V, exact_voltages, ladder  # noqa: F401
 
 TIGHT = {"rtol": 1e-10, "atol": 1e-12}
-
-
-def ladder_matrix(n: int, r: float = R) -> tuple[np.ndarray, np.ndarray]:
-    """``v' = A v + b`` of the ladder with every resistor ``r``."""
-    g = 1.0 / (r * C)
-    A = np.diag(np.full(n, -2.0 * g)) + np.diag(np.full(n - 1, g), 1) \
-        + np.diag(np.full(n - 1, g), -1)
-    A[-1, -1] = -g
-    b = np.zeros(n)
-    b[0] = g * V
-    return A, b
-
-
-def exact_voltages(n: int, t: np.ndarray) -> np.ndarray:
-    A, b = ladder_matrix(n)
-    v_inf = np.linalg.solve(A, -b)
-    return np.array([v_inf - expm(A * tk) @ v_inf for tk in t]).T
 
 
 def voltages(res, n: int) -> np.ndarray:
