@@ -7,6 +7,7 @@ natural frequency has a local minimum wherever an oscillation of another frequen
 lines up with part of the three-period record (about 1.95, 2.86, 4.8 and 9.6 rad/s
 besides the true 7 rad/s): a classic multi-minimum identification case."""
 
+import inspect
 import json
 
 import numpy as np
@@ -234,22 +235,8 @@ def test_an_error_inside_casadi_fails_its_start_only(monkeypatch, problem):
 
 
 # --------------------------------------------------------------------------------- CLI
-MODEL_FILE = '''
-import mechatron as mt
-
-
-class Oscillator(mt.Component):
-    """x'' + 2 zeta w x' + w^2 x = 0."""
-
-    w = mt.Parameter("rad/s", default=1.0)
-    zeta = mt.Parameter("1", default=0.1)
-    x = mt.Variable("m", start=1.0)
-    v = mt.Variable("m/s", start=0.0)
-
-    def equations(self):
-        return [mt.der(self.x) == self.v,
-                mt.der(self.v) == -self.w ** 2 * self.x - 2 * self.zeta * self.w * self.v]
-'''
+#: the model file the command reads: the oscillator above, as its source
+MODEL_FILE = "import mechatron as mt\n\n\n" + inspect.getsource(Oscillator)
 
 
 def test_estimate_command_runs_the_starts_of_its_file(tmp_path, capsys):
