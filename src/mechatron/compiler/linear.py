@@ -158,7 +158,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
            classes: dict[str, str] | None = None,
            parameters: list[ca.SX] | None = None,
            stacked: tuple[ca.SX, ca.SX] | None = None,
-           sparsity: ca.Sparsity | None = None) -> Reduction:
+           sparsity: ca.Sparsity | None = None,
+           jacobian: ca.SX | None = None) -> Reduction:
     """Reduce the linear part of the equations exactly; raise on a dependency.
 
     An unknown's coefficient takes part when it is a number or an expression of
@@ -183,8 +184,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         symbolic coefficients; default: only numeric coefficients are.
     stacked : (SX, SX), optional
         ``vertcat(*res)`` and ``vertcat(*var_syms)``, if the caller has them already.
-    sparsity : Sparsity, optional
-        Their Jacobian's sparsity, if the caller has it.
+    sparsity, jacobian : Sparsity, SX, optional
+        Their Jacobian's sparsity, and the Jacobian, if the caller has them.
 
     Raises
     ------
@@ -195,8 +196,9 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     n = len(var_syms)
     if not res:
         return Reduction(list(adj))
-    jac = sparse_jacobian(*(stacked if stacked is not None else
-                            (ca.vertcat(*res), ca.vertcat(*var_syms))), sparsity)
+    jac = jacobian if jacobian is not None else sparse_jacobian(
+        *(stacked if stacked is not None else (ca.vertcat(*res), ca.vertcat(*var_syms))),
+        sparsity)
     rows, cols = jac.sparsity().get_triplet()
     const: list[set[int]] = [set() for _ in res]
     linear: list[dict] = [{} for _ in res]

@@ -51,34 +51,38 @@ class Lowered:
 _SAMPLED_PATTERN_ROWS = 250_000   # from this many equations on, see _pattern
 
 
-def _pattern(expr: ca.SX, syms: ca.SX) -> ca.Sparsity:
+def _pattern(expr: ca.SX, syms: ca.SX) -> tuple[ca.Sparsity, ca.SX | None]:
     """``jacobian_sparsity(expr, syms)``, with the rows that hold hundreds of variables
-    found first and swept apart from the others when there are many rows.
+    found first and swept apart from the others when there are many rows; and the
+    Jacobian itself when it was formed on the way (else None).
 
     CasADi's sweep over a few hundred thousand rows slows down several-fold when one
     row (the flow balance of a reference node that every branch of a ladder meets)
     holds most columns. Such rows are found on every 64th column (a row with 8 of
-    them there holds hundreds of variables); the pattern is the same either way."""
+    them there holds hundreds of variables); the pattern is the same either way. Each
+    part is then differentiated at once, and the pattern read off its Jacobian:
+    ``casadi.jacobian`` forms the same pattern inside, and on such a graph every
+    sweep costs (`mechatron.compiler.linear.reveal` takes the Jacobian)."""
     if expr.numel() < _SAMPLED_PATTERN_ROWS:
-        return ca.jacobian_sparsity(expr, syms)
+        return ca.jacobian_sparsity(expr, syms), None
     probe = ca.jacobian_sparsity(expr, syms[::64])
     count = np.diff(np.asarray(probe.get_crs()[0], dtype=np.int64))
     dense = np.flatnonzero(count >= 8)
     if dense.size == 0:
-        return ca.jacobian_sparsity(expr, syms)
+        return ca.jacobian_sparsity(expr, syms), None
     sparse = np.flatnonzero(count < 8)
-    both = ca.vertcat(ca.jacobian_sparsity(expr[sparse.tolist()], syms),
-                      ca.jacobian_sparsity(expr[dense.tolist()], syms))
-    order = np.argsort(np.concatenate([sparse, dense])).tolist()
-    return both.sub(order, list(range(both.size2())), False)[0]
+    both = ca.vertcat(ca.jacobian(expr[sparse.tolist()], syms),
+                      ca.jacobian(expr[dense.tolist()], syms))
+    jac = both[np.argsort(np.concatenate([sparse, dense])).tolist(), :]
+    return jac.sparsity(), jac
 
 
-def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity]:
-    """The incidence of ``expr`` in ``syms`` as rows of column indices, and the sparsity
-    of the Jacobian it comes from."""
-    sp = _pattern(expr, syms)
+def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity, ca.SX | None]:
+    """The incidence of ``expr`` in ``syms`` as rows of column indices, the sparsity of
+    the Jacobian it comes from, and that Jacobian if it was formed (see `_pattern`)."""
+    sp, jac = _pattern(expr, syms)
     ptr, col = sp.get_crs()
-    return [col[a:b] for a, b in zip(ptr, ptr[1:])], sp
+    return [col[a:b] for a, b in zip(ptr, ptr[1:])], sp, jac
 
 
 class _Singular(StructuralError):
@@ -189,7 +193,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     if res:
         res_vec, var_vec = stacked if stacked is not None else (ca.vertcat(*res),
                                                                 ca.vertcat(*var_syms))
-    adj, pattern = _csr(res_vec, var_vec) if res else ([], None)
+    adj, pattern, jac = _csr(res_vec, var_vec) if res else ([], None, None)
     # derivative symbols that appear nowhere do not make their variable a state
     used = set(chain.from_iterable(adj))
     for i, d in enumerate(var_to_diff):
@@ -202,7 +206,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # and inductors, a loop of voltage sources and capacitors) are exposed first
     reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
                        classes, parameters, stacked=(res_vec, var_vec) if res else None,
-                       sparsity=pattern)
+                       sparsity=pattern, jacobian=jac)
     try:
         ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
     except StructuralError as exc:

@@ -1,0 +1,75 @@
+"""The structural pass on many rows: the Jacobian pattern found by sampling
+(`mechatron.compiler.structure._pattern`), which forms the Jacobian on the way and hands
+it to `mechatron.compiler.linear.reveal`, against CasADi's own pattern and Jacobian."""
+
+import casadi as ca
+import numpy as np
+
+import mechatron as mt
+import mechatron.compiler.structure as st
+from tests.compiler.test_flatten_templates import ladder
+
+
+def _rows(n):
+    """``n`` sparse rows (each in three variables, one nonlinear), a row of 100 variables
+    (sparse to the probe, more than `_DENSE_ROW` to `sparse_jacobian`) and a row in all
+    of them, in a scrambled order."""
+    x = ca.SX.sym("x", n)
+    rows = [x[i] * x[(i + 1) % n] - ca.sin(x[(i + 7) % n]) for i in range(n)]
+    rows.append(ca.sum1(x[: 100]) - 2 * x[5])
+    rows.append(ca.sum1(ca.exp(x)))
+    order = np.random.default_rng(3).permutation(len(rows)).tolist()
+    return ca.vertcat(*[rows[k] for k in order]), x
+
+
+def test_the_sampled_pattern_and_jacobian_equal_casadis(monkeypatch):
+    expr, x = _rows(3000)
+    monkeypatch.setattr(st, "_SAMPLED_PATTERN_ROWS", 1)
+    pattern, jac = st._pattern(expr, x)
+    assert jac is not None                  # the dense row was found, the path taken
+    assert pattern == ca.jacobian_sparsity(expr, x)
+    assert jac.sparsity() == pattern
+    point = np.random.default_rng(4).uniform(-1.0, 1.0, x.numel())
+    ours = ca.Function("ours", [x], [jac])(point)
+    theirs = ca.Function("theirs", [x], [ca.jacobian(expr, x)])(point)
+    assert ours.sparsity() == theirs.sparsity()
+    np.testing.assert_allclose(ours.nonzeros(), theirs.nonzeros(), rtol=1e-14, atol=0)
+
+
+def test_without_a_dense_row_the_pattern_is_casadis_and_no_jacobian_is_formed(
+        monkeypatch):
+    x = ca.SX.sym("x", 500)
+    expr = ca.vertcat(*[x[i] - 2 * x[(i + 1) % 500] for i in range(500)])
+    monkeypatch.setattr(st, "_SAMPLED_PATTERN_ROWS", 1)
+    pattern, jac = st._pattern(expr, x)
+    assert jac is None
+    assert pattern == ca.jacobian_sparsity(expr, x)
+
+
+def test_a_ladder_lowers_the_same_through_the_sampled_pattern(monkeypatch):
+    """A ladder of 1000 sections (its reference node's flow balance holds 1000
+    currents) lowered both ways: the same states, blocks and functions."""
+    plain = mt.compile_model(ladder(1000))
+    taken = []
+    pattern = st._pattern
+
+    def spy(expr, syms):
+        out = pattern(expr, syms)
+        taken.append(out[1] is not None)
+        return out
+
+    monkeypatch.setattr(st, "_SAMPLED_PATTERN_ROWS", 1)
+    monkeypatch.setattr(st, "_pattern", spy)
+    sampled = mt.compile_model(ladder(1000))
+    assert any(taken)
+    assert sampled.state_names == plain.state_names
+    assert sampled.alg_names == plain.alg_names
+    for key in ("blocks", "largest_block", "tearing_variables", "equations"):
+        assert sampled.report[key] == plain.report[key], key
+    rng = np.random.default_rng(5)
+    x = rng.uniform(-1.0, 1.0, plain.f_ode.size1_in(1))
+    args = (0.3, x, np.zeros(plain.f_ode.size1_in(2)), plain.p0)
+    np.testing.assert_array_equal(np.asarray(sampled.f_ode(*args)),
+                                  np.asarray(plain.f_ode(*args)))
+    np.testing.assert_array_equal(np.asarray(sampled.f_out(*args)),
+                                  np.asarray(plain.f_out(*args)))
