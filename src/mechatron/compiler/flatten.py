@@ -28,7 +28,7 @@ from mechatron.units import dimensionality, to_si, ureg
 __all__ = ["FlatModel", "FlatVariable", "FlatParameter", "FlatEquation", "flatten"]
 
 
-@dataclass
+@dataclass(slots=True)
 class FlatParameter:
     name: str
     sym: ca.SX
@@ -42,7 +42,7 @@ class FlatParameter:
     is_input: bool = False
 
 
-@dataclass
+@dataclass(slots=True)
 class BoundParameter:
     """A part's parameter given as an expression of its parent's parameters
     (``r = Resistor(R=R / 2)`` in the parent's class): not a slot of ``p`` of its own."""
@@ -56,7 +56,7 @@ class BoundParameter:
     binding: str       # as written, e.g. "(R / 2) of 'motor'"
 
 
-@dataclass
+@dataclass(slots=True)
 class FlatVariable:
     name: str
     sym: ca.SX
@@ -83,7 +83,7 @@ class FoldedPort:
         self.order = order
 
 
-@dataclass
+@dataclass(slots=True)
 class FlatEquation:
     residual: ca.SX
     origin: object     # "r1: v == R*i" or "connect(r1.n, c1.p)"; str() formats it

@@ -60,7 +60,7 @@ class Member:
         return f"Member({self.path!r}, {'outside' if self.outside else 'inside'})"
 
 
-@dataclass
+@dataclass(slots=True)
 class ConnectionSet:
     members: list[Member]
 
