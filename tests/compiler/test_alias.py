@@ -85,15 +85,18 @@ def _classes_here(flat):
     for a, b, *_ in flat.aliases:
         edges[a].add(b)
         edges[b].add(a)
+    names = list(flat.variables)      # a template's hints name variables by number
     for eq in flat.equations:
         hint = eq.alias
-        if hint is None:
+        if hint is None or hint[0] == "none":
             continue
+        a = names[hint[1]] if isinstance(hint[1], int) else hint[1]
         if hint[0] == "pair":
-            edges[hint[1]].add(hint[2])
-            edges[hint[2]].add(hint[1])
+            b = names[hint[2]] if isinstance(hint[2], int) else hint[2]
+            edges[a].add(b)
+            edges[b].add(a)
         elif hint[0] == "const":
-            fixed.add(hint[1])
+            fixed.add(a)
     seen, classes = set(), []
     for start in flat.variables:
         if start in seen:

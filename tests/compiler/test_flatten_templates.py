@@ -174,3 +174,36 @@ def test_parameters_passed_on_unchanged_reach_each_instance(monkeypatch):
     with_templates, without = flat_both(build, monkeypatch)
     assert [str(e.residual) for e in with_templates.equations] == \
         [str(e.residual) for e in without.equations]
+
+
+def _hints_by_path(flat):
+    """Each template equation's alias hint, its variables named by path: a numbered
+    hint through the model's variables, and the class's own hint with the instance's
+    path (what `_Template.add` gives when the numbers are not known)."""
+    names = list(flat.variables)
+    out = []
+    for eq in flat.equations:
+        origin = eq.origin
+        if not isinstance(origin, fl._TemplateOrigin) or eq.alias[0] == "none":
+            continue
+        hint = eq.alias
+        assert isinstance(hint[1], int)                    # bound in bulk: numbers
+        given = (hint[0], names[hint[1]], names[hint[2]], hint[3]) \
+            if hint[0] == "pair" else (hint[0], names[hint[1]], hint[2])
+        own = origin.template.hints[origin.k]
+        prefix = eq.owner + "." if eq.owner else ""
+        expected = (own[0], prefix + own[1][1:], prefix + own[2][1:], own[3]) \
+            if own[0] == "pair" else (own[0], prefix + own[1][1:], own[2])
+        out.append((given, expected))
+    return out
+
+
+def test_numbered_alias_hints_name_the_variables_of_the_class_hint():
+    """Also in a model whose variables are moved after binding (a subsystem's pin read
+    by an equation goes back to its place of declaration)."""
+    from tests.compiler.test_folding import deep_ladder, reading_model
+    for build in (lambda: ladder(3), drive, deep_ladder, reading_model):
+        pairs = _hints_by_path(fl.flatten(build()))
+        assert pairs
+        for given, expected in pairs:
+            assert given == expected

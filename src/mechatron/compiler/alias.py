@@ -122,10 +122,11 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             parent[node], factor[node] = a, acc
         return a, factor[path[0]]
 
-    def union(a: str, b: str, s: float) -> bool:
-        """Record a = s*b; return False if that adds nothing new (a redundant equation)."""
-        ra, fa = find(index[a])
-        rb, fb = find(index[b])
+    def union(a: int, b: int, s: float) -> bool:
+        """Record a = s*b (variable numbers); return False if that adds nothing new (a
+        redundant equation)."""
+        ra, fa = find(a)
+        rb, fb = find(b)
         if ra == rb:
             return False
         k = s * fb / fa  # ra = k * rb
@@ -136,9 +137,9 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             const[rb] = const.pop(ra) / k
         return True
 
-    def fix(a: str, value: float) -> bool:
+    def fix(a: int, value: float) -> bool:
         """Record a = value; False if the class of ``a`` has a value already."""
-        root, f = find(index[a])
+        root, f = find(a)
         if root in const:
             return False
         const[root] = value / f
@@ -146,7 +147,7 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
 
     redundant: list[FlatEquation] = []
     for a, b, s, origin in flat.aliases:
-        if not union(a, b, s):
+        if not union(index[a], index[b], s):
             redundant.append(FlatEquation(unknowns[a].sym - s * unknowns[b].sym, origin))
     kept = redundant
     keep = kept.append
@@ -159,10 +160,14 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
                 continue
         tag = hint[0]
         if tag == "pair":
-            if union(hint[1], hint[2], hint[3]):
+            a, b = hint[1], hint[2]
+            if type(a) is not int:          # by name; a template's by number
+                a, b = index[a], index[b]
+            if union(a, b, hint[3]):
                 continue
         elif tag == "const":
-            if fix(hint[1], hint[2]):
+            a = hint[1]
+            if fix(a if type(a) is int else index[a], hint[2]):
                 continue
         keep(eq)
     residuals = list(map(_RESIDUAL, kept))

@@ -89,7 +89,8 @@ class FlatEquation:
     origin: object     # "r1: v == R*i" or "connect(r1.n, c1.p)"; str() formats it
     owner: str = ""    # path of the component the equation belongs to
     #: what alias elimination would read off the residual, known from the class's
-    #: template: ("pair", a, b, s) for a == s*b, ("const", a, value), or ("none",)
+    #: template: ("pair", a, b, s) for a == s*b, ("const", a, value), or ("none",);
+    #: a and b are variable names, or numbers (their place in `FlatModel.variables`)
     alias: tuple | None = None
 
 
@@ -268,8 +269,18 @@ def _declaration_order(flat: FlatModel) -> None:
         start = max(start, position)
     order.extend(rest[start:])
     variables = flat.variables
+    number = dict(zip(variables, range(len(variables))))
     flat.variables = {n: variables[n] for n in order}
     flat.__dict__.pop("_variable_stack", None)     # stacked in the old order
+    # alias hints given by variable number (`_Template.add`) follow their variables
+    moved_to = [0] * len(order)
+    for new, n in enumerate(order):
+        moved_to[number[n]] = new
+    for eq in flat.equations:
+        hint = eq.alias
+        if hint is not None and hint[0] != "none" and type(hint[1]) is int:
+            eq.alias = (hint[0], moved_to[hint[1]], moved_to[hint[2]], hint[3]) \
+                if hint[0] == "pair" else (hint[0], moved_to[hint[1]], hint[2])
     for port in flat.folded:        # still folded: after the ports declared before it
         port.position += sum(len(names) for position, k, names in late
                              if (position, k) < (port.position, port.order))
@@ -810,7 +821,8 @@ class _Template:
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
                  "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
-                 "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases")
+                 "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
+                 "row_hints", "row_bases")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=()):
@@ -850,6 +862,18 @@ class _Template:
         self.root_hints = [h if h[0] == "none" else
                            (h[0], h[1][1:], h[2][1:], h[3]) if h[0] == "pair" else
                            (h[0], h[1][1:], h[2]) for h in self.hints]
+        # and by the place of each variable among the element's and its ports' (which
+        # base, row after it): an instance whose variables were bound in bulk gives its
+        # hints as variable numbers, without forming their paths (see `add`)
+        self.row_hints = None
+        read = [i for p in self.aliases if p[0] == "pair" for i in p[1:3]] + \
+            [p[1] for p in self.aliases if p[0] == "const"]
+        if var_rows is not None and all(i in var_rows for i in read):
+            self.row_hints = [p if p[0] == "none" else
+                              ("pair", *var_rows[p[1]], *var_rows[p[2]], p[3])
+                              if p[0] == "pair" else ("const", *var_rows[p[1]], p[2])
+                              for p in self.aliases]
+            self.row_bases = sorted({var_rows[i][0] for i in read})    # bases read
 
     def add(self, flat: FlatModel, el, where: str, ders=None) -> None:
         """Add the instance ``el``; ``ders`` holds derivative symbols made beforehand
@@ -889,7 +913,13 @@ class _Template:
         self.paths.append(owner)
         if self.par_slots:
             self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
-        if owner:
+        base = bases[-1 - len(self.ports):]
+        if self.row_hints is not None and all(base[w] >= 0 for w in self.row_bases):
+            # by variable number (its row in the model's variables), see `_Template`
+            hints = [h if h[0] == "none" else
+                     ("pair", base[h[1]] + h[2], base[h[3]] + h[4], h[5]) if h[0] == "pair"
+                     else ("const", base[h[1]] + h[2], h[3]) for h in self.row_hints]
+        elif owner:
             hints = [h if h[0] == "none" else
                      ("pair", owner + h[1], owner + h[2], h[3]) if h[0] == "pair"
                      else ("const", owner + h[1], h[2]) for h in self.hints]
