@@ -146,17 +146,25 @@ class FlatModel:
         as one column, taken from the column of all variable symbols, which is stacked
         once: a ``vertcat`` converts each scalar from Python (about 1 us each), indexing
         stays in CasADi."""
+        column, index = self._stacked()
+        if names is None:
+            return column
+        rows = [index[n] for n in names]
+        return column[rows] if rows else ca.SX(0, 1)
+
+    def variable_rows(self) -> dict[str, int]:
+        """Each variable's row in `stack_variables`' column (its place in declaration
+        order)."""
+        return self._stacked()[1]
+
+    def _stacked(self) -> tuple[ca.SX, dict[str, int]]:
         cache = self.__dict__.get("_variable_stack")
         if cache is None or cache[0] != len(self.variables):
             index = {n: k for k, n in enumerate(self.variables)}
             column = ca.vertcat(*[v.sym for v in self.variables.values()]) if index \
                 else ca.SX(0, 1)
             cache = self.__dict__["_variable_stack"] = (len(index), column, index)
-        _, column, index = cache
-        if names is None:
-            return column
-        rows = [index[n] for n in names]
-        return column[rows] if rows else ca.SX(0, 1)
+        return cache[1], cache[2]
 
     @functools.cached_property
     def physical_owners(self) -> frozenset:
@@ -383,9 +391,8 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 pi += 1
                 raw = el._values.get(key, decl.default)
                 if isinstance(raw, ParameterExpression):
-                    syms[key], own_values[key] = _bind_expression(
-                        flat, el, key, decl, raw, values, problems)
-                    el_rows[j] = _passed_row(el, decl, raw, par_rows)
+                    syms[key], own_values[key], el_rows[j] = _bind_expression(
+                        flat, el, key, decl, raw, values, problems, par_rows)
                     continue
                 syms[key] = sym
                 value = float("nan")
@@ -428,19 +435,6 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     if not base and len(variables) == len(var_names):   # the column holds them all
         flat.__dict__["_variable_stack"] = (len(var_names), var_column,
                                             dict(zip(var_names, range(len(var_names)))))
-
-
-def _passed_row(el, decl, raw, par_rows) -> int:
-    """The row in the parameter column of a parameter bound to a parameter of its parent
-    unchanged (``R=R``: the same symbol), or -1 (an expression, or a problem)."""
-    parent = el._parent
-    rows = par_rows.get(id(parent)) if parent is not None else None
-    if rows is None:
-        return -1
-    missing, message, name = _binding_check(raw, type(parent), decl.unit)
-    if missing or message or name is None:
-        return -1
-    return rows[_binding_plan(type(parent))[2].index(name)]
 
 
 def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None:
@@ -573,10 +567,13 @@ def _binding_plan(cls):
     return params, plain, tuple(p[0] for p in params), tuple(p[0] for p in plain)
 
 
-def _bind_expression(flat, el, key, decl, expr, values, problems):
+def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows):
     """Bind ``el.key`` to an expression of its parent's parameters: the symbol is the
-    expression of the parent's symbols, the value its value; units must agree."""
-    path = _join(el.path, key)
+    expression of the parent's symbols, the value its value; units must agree. Returns
+    ``(symbol, value, row)``: ``row`` is the parent parameter's row in the parameter
+    column for a parameter passed on unchanged (``R=R``: the same symbol), else -1 (an
+    expression, or a problem)."""
+    path = _join(el._path_cache or "", key)
     parent = el._parent
     text = _expression_text(expr)
 
@@ -586,28 +583,32 @@ def _bind_expression(flat, el, key, decl, expr, values, problems):
     if parent is None or parent._syms is None:
         problems.append(f"{where()} refers to parameters of an enclosing component, but "
                         f"{el.describe()} has none. Give {key} a value.")
-        return ca.SX.nan(), float("nan")
+        return ca.SX.nan(), float("nan"), -1
     missing, message, name = _binding_check(expr, type(parent), decl.unit)
     if missing:
         problems.append(f"{where()}: {', '.join(missing)} is not a parameter of "
                         f"{parent.describe()}. Pass on parameters of the class whose body "
                         "declares the part.")
-        return ca.SX.nan(), float("nan")
+        return ca.SX.nan(), float("nan"), -1
     if message:
         problems.add(UnitError, f"{where()}: {message}")
-        return ca.SX.nan(), float("nan")
+        return ca.SX.nan(), float("nan"), -1
     pvals = values.get(id(parent), {})
+    row = -1
     if name is not None:            # R=R: the parent's symbol and value themselves
         sym, value = parent._syms[name], float(pvals.get(name, float("nan")))
+        rows = par_rows.get(id(parent))
+        if rows is not None:
+            row = rows[_binding_plan(type(parent))[2].index(name)]
     else:
         sym = expr.evaluate(lambda n: parent._syms[n])
         sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
         value = float(expr.evaluate(lambda n: pvals.get(n, float("nan"))))
     _check_range(el, key, decl, value, problems)
     flat.bound_parameters[path] = BoundParameter(
-        path, sym, value, decl.unit, decl.doc, el.path,
-        f"{text} of '{parent.path or flat.name}'")
-    return sym, value
+        path, sym, value, decl.unit, decl.doc, el._path_cache or "",
+        f"{text} of '{parent._path_cache or flat.name}'")
+    return sym, value, row
 
 
 _TEXTS: dict = {}

@@ -104,7 +104,7 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
             out[at] = extra
             out[~is_folded] = own
             merged.append(out.tolist())
-        index = {name: k for k, name in enumerate(names)}
+        index = flat.variable_rows()
         t_row = np.repeat(at, [len(f[4]) for f in folded])
         t_var = np.array([index[term] for f in folded for term, _ in f[4]], dtype=np.intp)
         t_coef = np.array([c for f in folded for _, c in f[4]], dtype=float) * scale[t_var]
