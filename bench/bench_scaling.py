@@ -202,9 +202,11 @@ def compile_once(n: int) -> dict:
     mt.compile_model(rc_ladder(2))
     gc.collect()
     model, t_build = clock(rc_ladder, n)
+    usage = resource.getrusage(resource.RUSAGE_SELF)
     cpu = time.process_time()
     cm, t_compile = clock(mt.compile_model, model)
     cpu = time.process_time() - cpu
+    after = resource.getrusage(resource.RUSAGE_SELF)
     rep = cm.report
     flat = (rep.get("equations") or {}).get("flat") or 0
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -213,6 +215,11 @@ def compile_once(n: int) -> dict:
             "passes_cpu_s": dict(rep.get("cpu_timings", {})), "equations_flat": flat,
             "states": len(cm.state_names),
             "us_per_equation": 1e6 * cpu / flat if flat else None,
+            # user and system (kernel) CPU, and page faults: the kernel's share is mostly
+            # first touches of new memory
+            "user_s": after.ru_utime - usage.ru_utime,
+            "system_s": after.ru_stime - usage.ru_stime,
+            "minor_page_faults": after.ru_minflt - usage.ru_minflt,
             "peak_rss_MB": peak / 1024 if sys.platform != "darwin" else peak / 2**20}
 
 
@@ -227,7 +234,8 @@ def compile_scaling(sizes: list[int], fresh: bool = True) -> dict:
             row = json.loads(done.stdout.strip().splitlines()[-1])
         else:
             row = compile_once(n)
-        log(f"rc_ladder N={n} compile alone: cpu {row['compile_cpu_s']:.3f} s, "
+        log(f"rc_ladder N={n} compile alone: cpu {row['compile_cpu_s']:.3f} s "
+            f"(system {row['system_s']:.3f} s, {row['minor_page_faults']} page faults), "
             f"{row['us_per_equation']:.1f} us/equation, peak {row['peak_rss_MB']:.0f} MB")
         rows.append(row)
     first = rows[0]["us_per_equation"] if rows else None
