@@ -207,3 +207,27 @@ def test_numbered_alias_hints_name_the_variables_of_the_class_hint():
         assert pairs
         for given, expected in pairs:
             assert given == expected
+
+
+def test_template_residuals_are_gathered_from_their_class_column():
+    """`stack_residuals` gathers the rows of template equations from their classes'
+    columns without forming each residual, and takes a residual set since as it is."""
+    flat = fl.flatten(drive())
+    eqs = flat.equations
+    lazy = [eq for eq in eqs if isinstance(eq, fl._TemplateEquation)]
+    assert lazy and all(fl._RESIDUAL_SLOT.__get__(eq) is None for eq in lazy)
+    mixed = list(reversed(eqs))                   # any order, both kinds
+    replaced = lazy[1]
+    mixed_column = fl.stack_residuals(mixed)
+    replaced.residual = 7.0 * replaced.residual   # as pre's replacement does
+    after = fl.stack_residuals(mixed)
+    one_by_one = ca.vertcat(*[eq.residual for eq in mixed])
+    x = ca.symvar(ca.vertcat(one_by_one, mixed_column))
+    values = np.random.default_rng(6).uniform(0.5, 2.0, len(x))
+    f = ca.Function("f", x, [mixed_column, after, one_by_one])
+    before_v, after_v, want = (np.asarray(v).ravel() for v in f(*values))
+    np.testing.assert_array_equal(after_v, want)
+    row = next(i for i, eq in enumerate(mixed) if eq is replaced)
+    np.testing.assert_allclose(want[row], 7.0 * before_v[row], rtol=1e-15)
+    keep = np.arange(len(mixed)) != row
+    np.testing.assert_array_equal(before_v[keep], want[keep])

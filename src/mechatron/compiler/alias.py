@@ -23,7 +23,7 @@ from operator import attrgetter
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.flatten import FlatEquation, FlatModel
+from mechatron.compiler.flatten import FlatEquation, FlatModel, stack_residuals
 from mechatron.errors import InitializationError
 
 __all__ = ["AliasResult", "eliminate_aliases"]
@@ -170,20 +170,19 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             if fix(a if type(a) is int else index[a], hint[2]):
                 continue
         keep(eq)
-    residuals = list(map(_RESIDUAL, kept))
     origins = list(map(_ORIGIN, kept))
     owners = list(map(_OWNER, kept))
     n_before = len(flat.equations) + len(flat.aliases)
-    result = AliasResult(residuals, origins, owners, [], n_before=n_before)
-    if not n:
-        return result
-    gone = _classes(flat, names, index, parent, factor, const, result)
-    if residuals:
-        stacked = ca.vertcat(*residuals)
-        old, new = _replacements(flat, names, index, gone, result)
+    # the kept residuals stacked: a class template's rows gathered from its column
+    stacked = stack_residuals(kept) if kept else None
+    result = AliasResult([], origins, owners, [], n_before=n_before)
+    if n:
+        gone = _classes(flat, names, index, parent, factor, const, result)
+        old, new = _replacements(flat, names, index, gone, result) if kept else (None, None)
         if old is not None:
             stacked = ca.substitute(stacked, old, new)
-            result.residuals = ca.vertsplit(stacked)
+    if kept:
+        result.residuals = ca.vertsplit(stacked)
         result.stacked = stacked
     return result
 
@@ -237,8 +236,7 @@ class _Eliminated(Mapping):
         return repr(self._dict())
 
 
-_RESIDUAL, _ORIGIN, _OWNER = (attrgetter("residual"), attrgetter("origin"),
-                               attrgetter("owner"))
+_ORIGIN, _OWNER = attrgetter("origin"), attrgetter("owner")
 
 
 class _Numbers(dict):

@@ -94,6 +94,63 @@ class FlatEquation:
     alias: tuple | None = None
 
 
+_RESIDUAL_SLOT = FlatEquation.__dict__["residual"]     # the slot, under the property
+
+
+class _TemplateEquation(FlatEquation):
+    """An equation of a `_Template` instance: its residual is the row ``row`` of its
+    class's stacked residuals (`_Template.column`), formed as a scalar only when read.
+    Alias elimination gathers the rows it keeps from the columns instead
+    (`stack_residuals`): no Python object per equation on the way."""
+
+    __slots__ = ("row",)
+
+    def __init__(self, origin, owner, alias, row):
+        _RESIDUAL_SLOT.__set__(self, None)
+        self.origin, self.owner, self.alias, self.row = origin, owner, alias, row
+
+    @property
+    def residual(self):
+        r = _RESIDUAL_SLOT.__get__(self)
+        if r is None:
+            column = self.origin.template.column
+            if column is None:                  # not instantiated yet
+                return None
+            r = column[self.row]
+            _RESIDUAL_SLOT.__set__(self, r)
+        return r
+
+    @residual.setter
+    def residual(self, value):
+        _RESIDUAL_SLOT.__set__(self, value)
+
+
+def stack_residuals(eqs) -> ca.SX:
+    """``vertcat`` of the residuals of ``eqs``: the rows of template equations gathered
+    from their classes' columns by one index (a residual set since, e.g. by `pre`'s
+    replacement, is taken as it is), the others stacked."""
+    parts: dict = {}            # template -> its number among the columns
+    columns, loose, where = [], [], []
+    for eq in eqs:
+        if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None:
+            tpl = eq.origin.template
+            k = parts.get(tpl)
+            if k is None:
+                k = parts[tpl] = len(columns)
+                columns.append(tpl.column)
+            where.append((k, eq.row))
+        else:
+            where.append((-1, len(loose)))
+            loose.append(eq.residual)
+    if not where:
+        return ca.SX(0, 1)
+    if not columns:
+        return ca.vertcat(*loose)
+    offset = np.cumsum([0] + [c.numel() for c in columns]).tolist()
+    index = [offset[k] + r if k >= 0 else offset[-1] + r for k, r in where]
+    return ca.vertcat(*columns, *loose)[index]
+
+
 @dataclass
 class FlatModel:
     name: str
@@ -768,7 +825,8 @@ def _collect_equations(flat: FlatModel, elements, problems,
         if tpl is not None:
             tpl.instantiate(flat)
     _discrete_states(flat, problems)
-    pending = [eq for eq in flat.equations if eq.residual is None]
+    pending = [eq for eq in flat.equations
+               if type(eq) is not _TemplateEquation and eq.residual is None]
     if pending:
         res = ca.vertcat(*[eq.origin.lhs for eq in pending]) - \
             ca.vertcat(*[eq.origin.rhs for eq in pending])
@@ -823,7 +881,7 @@ class _Template:
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
                  "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
-                 "row_hints", "row_bases")
+                 "row_hints", "row_bases", "column")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=()):
@@ -838,6 +896,8 @@ class _Template:
         self.instances: list = []   # SX column of each instance's symbols
         self.paths: list = []       # each instance's path
         self.equations: list = []   # FlatEquation of each instance, in order
+        #: every instance's residuals stacked, instance after instance (`instantiate`)
+        self.column: ca.SX | None = None
         #: each instance's first rows in the model's variables, its own then its ports',
         #: one instance after the other
         self.bases: list = []
@@ -926,7 +986,9 @@ class _Template:
                      else ("const", owner + h[1], h[2]) for h in self.hints]
         else:
             hints = self.root_hints
-        eqs = [FlatEquation(None, _TemplateOrigin(where, self, args, k), owner, hint)
+        first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
+        eqs = [_TemplateEquation(_TemplateOrigin(where, self, args, k), owner, hint,
+                                 first + k)
                for k, hint in enumerate(hints)]
         self.equations.append(eqs)
         flat.equations += eqs
@@ -941,12 +1003,8 @@ class _Template:
         if columns is None:
             flat_args = [a for args in self.instances for a in args]
             columns = ca.reshape(ca.vertcat(*flat_args), width, n)
-        out = (self.fun.map(n)(columns) if n > 1 else self.fun(columns)).nonzeros()
-        k = 0
-        for eqs in self.equations:
-            for eq in eqs:
-                eq.residual = out[k]
-                k += 1
+        out = self.fun.map(n)(columns) if n > 1 else self.fun(columns)
+        self.column = ca.vec(out)       # column-major: instance after instance
 
     def _columns(self, flat: FlatModel, n: int, width: int):
         """The instances' arguments as a ``width`` x ``n`` matrix; the variable slots are
