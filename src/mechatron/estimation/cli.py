@@ -9,9 +9,7 @@ plots and the full result as JSON.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import logging
 import sys
 import time
 from pathlib import Path
@@ -80,7 +78,7 @@ def _out_dir(path: str | None) -> Path | None:
 # ---------------------------------------------------------------------------- estimate
 def cmd_estimate(args: argparse.Namespace) -> int:
     from mechatron.estimation.config import build_estimation, load_config
-    from mechatron.estimation.problem import estimate
+    from mechatron.estimation.problem import estimate, passing_only
     _positive("--max-iterations", args.max_iterations)
     _positive("--starts", args.starts)
     _positive("--workers", args.workers)
@@ -112,7 +110,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         bar = Progress("estimate", enabled=not args.quiet)
         multi = dict(callback=lambda k, th, cost: bar.update(
             k, f"(iteration), cost {cost:.6g}"))
-    with _printed_here():
+    with passing_only(_not_in_summary):
         res = estimate(prob, max_iterations=args.max_iterations,
                        covariance=args.covariance, profile=_profile_arg(args.profile),
                        **multi)
@@ -214,25 +212,12 @@ def _starts_summary(res, address) -> str:
                         right="".join(str(k) for k in range(1, 2 * len(res.names) + 2)))
 
 
-class _Drop(logging.Filter):
-    """Drops the records the summary prints itself (``extra={"in_summary": True}``)."""
-
-    def filter(self, record) -> bool:
-        return not getattr(record, "in_summary", False)
-
-
-@contextlib.contextmanager
-def _printed_here():
-    """Hold back the estimator's uncertainty warnings (correlated residuals, poorly
-    identified parameters): the command prints them in its summary and JSON. Flags of
-    parameters on a bound or not identifiable are still logged."""
-    logger = logging.getLogger("mechatron.estimation.problem")
-    drop = _Drop()
-    logger.addFilter(drop)
-    try:
-        yield
-    finally:
-        logger.removeFilter(drop)
+def _not_in_summary(record) -> bool:
+    """Holds back the estimator's uncertainty warnings (correlated residuals, poorly
+    identified parameters) that the command prints in its summary and JSON
+    (``extra={"in_summary": True}``). Flags of parameters on a bound or not
+    identifiable are still logged."""
+    return not getattr(record, "in_summary", False)
 
 
 def _profile_arg(value):
@@ -265,7 +250,7 @@ def _html(path: Path, res, reports, cfg, args) -> Path:
 # ---------------------------------------------------------------------------- validate
 def cmd_validate(args: argparse.Namespace) -> int:
     from mechatron.estimation.config import build_estimation, load_config
-    from mechatron.estimation.problem import estimate
+    from mechatron.estimation.problem import estimate, passing_only
     cfg = load_config(args.config)
     out = _out_dir(args.out)
     if not args.data and not cfg.get("validation"):
@@ -277,7 +262,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
         values = _read_fit(args.fit)
     else:
         bar = Progress("estimate", enabled=not args.quiet)
-        with _printed_here():
+        with passing_only(_not_in_summary):
             res = estimate(prob, max_iterations=args.max_iterations,
                            callback=lambda k, th, cost: bar.update(
                                k, f"(iteration), cost {cost:.6g}"))

@@ -33,7 +33,6 @@ unbounded variables.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 import os
@@ -99,30 +98,17 @@ def start_points(problem, starts: int, *, seed: int = 0, sampling: str = "lhs",
     return X
 
 
-class _Quiet(logging.Filter):
+def _error_or_worse(record) -> bool:
     """Drops the warnings of the single fits (bounds, identifiability): the chosen fit's
     are logged again once it is known."""
-
-    def filter(self, record) -> bool:
-        return record.levelno >= logging.ERROR
-
-
-@contextlib.contextmanager
-def _quiet():
-    logger = logging.getLogger("mechatron.estimation.problem")
-    drop = _Quiet()
-    logger.addFilter(drop)
-    try:
-        yield
-    finally:
-        logger.removeFilter(drop)
+    return record.levelno >= logging.ERROR
 
 
 def _fit_start(problem, job) -> dict:
     """One start (a batch task): ``job`` is ``(start index, starting point, keywords
     of estimate)``. The problem's substeps are put back afterwards, so the next start on
     this worker begins from the same discretization."""
-    from mechatron.estimation.problem import estimate
+    from mechatron.estimation.problem import estimate, passing_only
     k, theta0, kwargs = job
     state = problem.substep_state()
     t0 = time.perf_counter()
@@ -131,7 +117,7 @@ def _fit_start(problem, job) -> dict:
            "iterations": 0, "evaluations": 0, "wall_time_s": 0.0, "error": None}
     res = substeps = None
     try:
-        with _quiet():
+        with passing_only(_error_or_worse):
             res = estimate(problem, initial=theta0, **kwargs)
         substeps = [b["substeps"] for b in problem.bound]
         res.problem = None                          # not sent back: the caller has it

@@ -44,6 +44,7 @@ is ``100 (1 - NRMSE)``).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import time
@@ -67,6 +68,18 @@ from mechatron.estimation.discretize import (Trajectory, check_model, choose_sub
                                              fastest_time_constant, grid_fits, noise_level)
 
 log = logging.getLogger(__name__)
+
+
+@contextlib.contextmanager
+def passing_only(keep):
+    """While inside, the estimator's log passes on only the records for which
+    ``keep(record)`` is true (the multi-start holds back each start's warnings, the
+    command line the ones its summary prints itself)."""
+    log.addFilter(keep)
+    try:
+        yield
+    finally:
+        log.removeFilter(keep)
 
 __all__ = ["FreeParameter", "EstimationProblem", "EstimationResult", "estimate",
            "validation_errors"]
