@@ -1595,15 +1595,18 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
                 ra = rb
             elif rb != ra:
                 parent[rb] = ra
-    networks: dict[int, list[Connector]] = {}
+    # a node's members share their network
+    roots = [root_of(parent, index[id(members[0].port)]) for members in nodes]
     grounded: set[int] = set()
-    for members in nodes:               # a node's members share their network
-        root = root_of(parent, index[id(members[0].port)])
-        ports = [m.port for m in members]
-        networks.setdefault(root, []).extend(ports)
-        if root not in grounded and any(
-                p._parent is not None and p._parent._reference for p in ports):
+    for root, members in zip(roots, nodes):
+        if root not in grounded and any(m.port._parent is not None and
+                                        m.port._parent._reference for m in members):
             grounded.add(root)
+    # the ports of the networks without a reference (for the message)
+    networks: dict[int, list[Connector]] = {}
+    for root, members in zip(roots, nodes):
+        if root not in grounded:
+            networks.setdefault(root, []).extend([m.port for m in members])
     for root, plist in networks.items():
         domain = type(plist[0]).domain
         if root in grounded or domain is None or not domain.needs_reference:
