@@ -265,16 +265,8 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
             # pivot(e, v) when no other equation holds v: e retires, nothing is updated
             e = next(iter(col))
             pivots[e] = v
-            del active[e]
             del col_rows[v]
-            for u in work[e]:
-                if ok[u] and u in col_rows:
-                    col = col_rows[u]
-                    col.pop(e, None)
-                    if len(col) == 1:
-                        col_singles.append(u)
-                    if col:
-                        dirty.append(u)
+            retire(e)
             continue
         if row_singles:
             _, e = heapq.heappop(row_singles)
