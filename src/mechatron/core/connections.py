@@ -76,11 +76,6 @@ def port_key(port) -> tuple:
     return ("port", id(port))
 
 
-def _is_own(port, writer: Element) -> bool:
-    owner = port.owner if isinstance(port, SignalRef) else port._parent
-    return owner is writer
-
-
 def is_driver(member: Member) -> bool:
     """Whether a signal element drives its set: a part's Output, or the writing
     component's own Input (which, seen from inside, brings a value in)."""
