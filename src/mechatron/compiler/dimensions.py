@@ -366,15 +366,11 @@ class _Symbols:
         units = [v.unit for v in variables]
         dim_of = {u: self._dim(u) for u in dict.fromkeys(units)}
         dims = list(map(dim_of.__getitem__, units))
-        # a dimensionless signal input/output, or variable of a component without
-        # physical ports, is a free signal
         for u, d in dim_of.items():
             if d != ONE:
                 continue
             for k in [k for k, unit in enumerate(units) if unit == u]:
-                v = variables[k]
-                if v.kind == "input" or v.kind == "output" or \
-                        (v.kind == "variable" and v.owner not in physical):
+                if _free_signal(variables[k], physical):
                     dims[k] = FREE
         self.dims = dims
         # the variables' column is stacked once per model (shared with other passes)
@@ -409,10 +405,16 @@ class _Symbols:
         v = flat.variables.get(name)
         if v is not None:           # not met: the variables are the walk's input
             d = self._dim(v.unit)
-            return FREE if d == ONE and (v.kind in ("input", "output") or (
-                v.kind == "variable" and v.owner not in flat.physical_owners)) else d
+            return FREE if d == ONE and _free_signal(v, flat.physical_owners) else d
         base = ctx.integral.get(name)      # "der(x)" -> "x"
         return _der(self.of(base)) if base is not None else FREE
+
+
+def _free_signal(v, physical) -> bool:
+    """Whether a dimensionless variable ``v`` is a free signal: a signal input or output,
+    or a variable of a component without physical ports (``physical``)."""
+    return v.kind == "input" or v.kind == "output" or \
+        (v.kind == "variable" and v.owner not in physical)
 
 
 def _der(d):
