@@ -103,7 +103,12 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     parent = list(range(n))        # a root is its own parent
     factor = [1.0] * n             # x[k] = factor[k] * x[parent[k]]
     const: dict[int, float] = {}   # root -> constant value (root = const)
-    index = _Numbers(zip(names, range(n)), parent, factor)
+    # the number of each variable: its row in the model's stacked variables (one
+    # dictionary shared with flattening, not a copy); a name that is not a variable is
+    # numbered on first use
+    rows = flat.variable_rows()
+    number = rows.get
+    index = _Numbers(rows, parent, factor)
 
     def find(a: int) -> tuple[int, float]:
         """Root of ``a`` and the factor with a = factor * root (path compressed)."""
@@ -147,7 +152,10 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
 
     redundant: list[FlatEquation] = []
     for a, b, s, origin in flat.aliases:
-        if not union(index[a], index[b], s):
+        ia, ib = number(a), number(b)
+        if ia is None or ib is None:
+            ia, ib = index[a], index[b]
+        if not union(ia, ib, s):
             redundant.append(FlatEquation(unknowns[a].sym - s * unknowns[b].sym, origin))
     kept = redundant
     keep = kept.append
@@ -239,19 +247,30 @@ class _Eliminated(Mapping):
 _ORIGIN, _OWNER = attrgetter("origin"), attrgetter("owner")
 
 
-class _Numbers(dict):
-    """Variable name -> number for the union-find; a name that is not a model variable
-    gets a number past theirs on first use (it joins classes, but is neither kept nor
-    eliminated)."""
+class _Numbers:
+    """Variable name -> number for the union-find: a model variable's row ``rows[name]``;
+    a name that is not a model variable gets a number past theirs on first use (it
+    joins classes, but is neither kept nor eliminated)."""
 
-    def __init__(self, items, parent: list, factor: list):
-        super().__init__(items)
+    __slots__ = ("rows", "extra", "parent", "factor")
+
+    def __init__(self, rows: Mapping, parent: list, factor: list):
+        self.rows, self.extra = rows, {}
         self.parent, self.factor = parent, factor
 
-    def __missing__(self, name: str) -> int:
-        j = self[name] = len(self.parent)
-        self.parent.append(j)
-        self.factor.append(1.0)
+    def get(self, name, default=None):
+        j = self.rows.get(name)
+        return self.extra.get(name, default) if j is None else j
+
+    def __contains__(self, name) -> bool:
+        return name in self.rows or name in self.extra
+
+    def __getitem__(self, name: str) -> int:
+        j = self.get(name)
+        if j is None:
+            j = self.extra[name] = len(self.parent)
+            self.parent.append(j)
+            self.factor.append(1.0)
         return j
 
 

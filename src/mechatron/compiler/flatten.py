@@ -336,6 +336,8 @@ def _declaration_order(flat: FlatModel) -> None:
     variables = flat.variables
     number = dict(zip(variables, range(len(variables))))
     flat.variables = {n: variables[n] for n in order}
+    if type(flat.context.unknowns) is _Unknowns:
+        flat.context.unknowns.variables = flat.variables
     flat.__dict__.pop("_variable_stack", None)     # stacked in the old order
     # alias hints given by variable number (`_Template.add`) follow their variables
     moved_to = [0] * len(order)
@@ -488,7 +490,8 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                         record.priority = given.priority
             vi += len(plain)
         el._syms = syms
-    ctx.unknowns.update(zip(var_names, var_syms))
+    if type(ctx.unknowns) is not _Unknowns:
+        ctx.unknowns = _Unknowns(variables, ctx.unknowns)
     if not base and len(variables) == len(var_names):   # the column holds them all
         flat.__dict__["_variable_stack"] = (len(var_names), var_column,
                                             dict(zip(var_names, range(len(var_names)))))
@@ -496,7 +499,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
 
 def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None:
     """Bind the variables of ``el`` one by one (a port bound on first read)."""
-    variables, unknowns = flat.variables, flat.context.unknowns
+    variables = flat.variables
     flat.__dict__.setdefault("_rows", {})[id(el)] = len(variables)
     starts = el._starts
     for key, kind, unit, doc, start, priority, hint, select in plain:
@@ -511,7 +514,30 @@ def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None
             priority = given.priority
         variables[path] = FlatVariable(path, sym, unit, doc, kind, owner_path, start,
                                        priority, hint, select)
-        unknowns[path] = sym
+
+
+class _Unknowns(dict):
+    """The build context's unknowns (`BuildContext.unknowns`), name -> symbol: the
+    model's variables read through ``flat.variables`` (no second dictionary of every
+    variable), the others (derivatives) held here."""
+
+    __slots__ = ("variables",)
+
+    def __init__(self, variables: dict, others: dict):
+        super().__init__(others)
+        self.variables = variables
+
+    def __missing__(self, name):
+        return self.variables[name].sym
+
+    def __contains__(self, name) -> bool:
+        return dict.__contains__(self, name) or name in self.variables
+
+    def get(self, name, default=None):
+        if dict.__contains__(self, name):
+            return dict.__getitem__(self, name)
+        var = self.variables.get(name)
+        return default if var is None else var.sym
 
 
 # -- symbols in bulk ------------------------------------------------------------------------
