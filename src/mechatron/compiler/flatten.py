@@ -70,6 +70,36 @@ class FlatVariable:
     state_select: str = "default"   # "avoid" / "default" / "prefer" (state selection hint)
 
 
+_SYM_SLOT = FlatVariable.__dict__["sym"]     # the slot, under the property
+
+
+class _ColumnVariable(FlatVariable):
+    """A variable bound in bulk (`_bind_symbols`): its symbol is the row ``row`` of the
+    column of all variables' symbols, formed as a Python object only when read. Most
+    are never read one by one: the passes take the column (`FlatModel.stack_variables`)."""
+
+    __slots__ = ("column", "row")
+
+    def __init__(self, name, column, row, unit, doc, kind, owner, start=None,
+                 priority="none", hint="", state_select="default"):
+        _SYM_SLOT.__set__(self, None)
+        self.name, self.column, self.row, self.unit, self.doc = name, column, row, unit, doc
+        self.kind, self.owner, self.start, self.priority = kind, owner, start, priority
+        self.hint, self.state_select = hint, state_select
+
+    @property
+    def sym(self):
+        s = _SYM_SLOT.__get__(self)
+        if s is None:
+            s = self.column[self.row]
+            _SYM_SLOT.__set__(self, s)
+        return s
+
+    @sym.setter
+    def sym(self, value):
+        _SYM_SLOT.__set__(self, value)
+
+
 class FoldedPort:
     """A folded subsystem port: its across variables equal those of the node's first
     member ``node``; each through variable is the sum of those of the members ``flow``
@@ -218,8 +248,7 @@ class FlatModel:
         cache = self.__dict__.get("_variable_stack")
         if cache is None or cache[0] != len(self.variables):
             index = {n: k for k, n in enumerate(self.variables)}
-            column = ca.vertcat(*[v.sym for v in self.variables.values()]) if index \
-                else ca.SX(0, 1)
+            column = _gathered(self.variables.values()) if index else ca.SX(0, 1)
             cache = self.__dict__["_variable_stack"] = (len(index), column, index)
         return cache[1], cache[2]
 
@@ -385,6 +414,52 @@ def _summary(name: str, problems: list[str]) -> str:
     return f"model '{name}': {len(problems)} problems:\n  " + "\n  ".join(problems)
 
 
+def _gathered(records) -> ca.SX:
+    """``vertcat`` of the symbols of ``records``: those still in a column
+    (`_ColumnVariable`) gathered from it by one index, the others stacked."""
+    parts: dict = {}            # id(column) -> its number among the columns
+    columns, loose, where = [], [], []
+    for v in records:
+        if type(v) is _ColumnVariable and _SYM_SLOT.__get__(v) is None:
+            k = parts.get(id(v.column))
+            if k is None:
+                k = parts[id(v.column)] = len(columns)
+                columns.append(v.column)
+            where.append((k, v.row))
+        else:
+            where.append((-1, len(loose)))
+            loose.append(v.sym)
+    if not columns:
+        return ca.vertcat(*loose)
+    offset = np.cumsum([0] + [c.numel() for c in columns]).tolist()
+    index = [offset[k] + r if k >= 0 else offset[-1] + r for k, r in where]
+    return ca.vertcat(*columns, *loose)[index]
+
+
+class _ColumnSyms(dict):
+    """The symbols of an element bound in bulk (its ``_syms``): its parameters' as
+    bound, its variables' read from the column of all variables on first read
+    (``offsets``: each variable's row after ``base``). A class template's instance never
+    reads them one by one (`_Template.add` takes their rows)."""
+
+    __slots__ = ("column", "base", "offsets")
+
+    def __missing__(self, key):
+        sym = self[key] = self.column[self.base + self.offsets[key]]
+        return sym
+
+    def filled(self) -> "_ColumnSyms":
+        """Every symbol read, in declaration order (parameters, then variables)."""
+        offsets = self.offsets
+        if any(not dict.__contains__(self, k) for k in offsets):
+            given = [(k, v) for k, v in self.items() if k not in offsets]
+            syms = ca.vertsplit(self.column[self.base:self.base + len(offsets)])
+            self.clear()
+            self.update(given)
+            self.update(zip(offsets, syms))
+        return self
+
+
 def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     """Bind a CasADi symbol to every parameter and variable; ports in ``folded`` get a
     mapping that binds them on first read (see `_FoldedSymbols`) instead.
@@ -407,7 +482,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         if folded and id(el) in folded:
             el._syms = _FoldedSymbols(shared, el, len(var_names), order)
             continue
-        params, plain, par_keys, var_keys = _binding_plan(type(el))
+        params, plain, par_keys, var_keys, offsets = _binding_plan(type(el))
         path = el._path_cache         # set by _walk
         if path:
             prefix = path + "."
@@ -422,25 +497,25 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             owner = el._parent if isinstance(el, Connector) else el
             var_plain.extend(plain)
             var_owner.extend([owner._path_cache if owner is not None else ""] * len(plain))
-        bound.append((el, params, plain, var_keys))
+        bound.append((el, params, plain, offsets))
     par_column, par_syms = _symbols(par_names)
     flat.__dict__["_parameter_column"] = par_column
     # id -> the row of each parameter in the column, in declaration order: its own, or
     # for a parameter passed on unchanged (R=R) its parent's; -1 for an expression
     par_rows = flat.__dict__["_parameter_rows"] = {}
-    var_column, var_syms = _symbols(var_names)
-    records = [FlatVariable(path, sym, unit, doc, kind, owner, start, priority, hint,
-                            select)
-               for path, sym, (_, kind, unit, doc, start, priority, hint, select), owner
-               in zip(var_names, var_syms, var_plain, var_owner)]
+    var_column = _symbols(var_names, split=False)[0]
+    records = [_ColumnVariable(path, var_column, row, unit, doc, kind, owner, start,
+                               priority, hint, select)
+               for row, path, (_, kind, unit, doc, start, priority, hint, select), owner
+               in zip(range(len(var_names)), var_names, var_plain, var_owner)]
     base = len(variables)            # variables bound before (none in flatten)
     variables.update(zip(var_names, records))
     rows = flat.__dict__.setdefault("_rows", {})
     pi = vi = 0
-    for el, params, plain, var_keys in bound:
+    for el, params, plain, offsets in bound:
         if params:
             own_values = values[id(el)] = {}
-            syms = {}
+            syms = _ColumnSyms() if plain else {}
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner._path_cache if owner is not None else ""
             el_rows = par_rows[id(el)] = list(range(pi, pi + len(params)))
@@ -469,13 +544,12 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 own_values[key] = value
                 parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
                                                  owner_path, (decl.min, decl.max))
-            if plain:
-                syms.update(zip(var_keys, var_syms[vi:vi + len(plain)]))
         elif plain:
-            syms = dict(zip(var_keys, var_syms[vi:vi + len(plain)]))
+            syms = _ColumnSyms()
         else:
             syms = {}
         if plain:
+            syms.column, syms.base, syms.offsets = var_column, vi, offsets
             rows[id(el)] = base + vi
             starts = el._starts
             if starts:
@@ -578,13 +652,14 @@ def _bulk_ok() -> bool:
     return _BULK[0]
 
 
-def _symbols(names: list[str]) -> tuple[ca.SX, list[ca.SX]]:
-    """The column of new symbols named ``names`` and its elements, in few CasADi calls."""
+def _symbols(names: list[str], split: bool = True) -> tuple[ca.SX, list[ca.SX] | None]:
+    """The column of new symbols named ``names`` and its elements (None if not
+    ``split``), in few CasADi calls."""
     if not names:
         return ca.SX(0, 1), []
     if len(names) > 8 and _bulk_ok():
         column = ca.SX.deserialize(_serialized_column(names))
-        return column, ca.vertsplit(column)
+        return column, ca.vertsplit(column) if split else None
     syms = [ca.SX.sym(n) for n in names]
     return ca.vertcat(*syms), syms
 
@@ -647,7 +722,9 @@ def _declaration_plan(cls):
 def _binding_plan(cls):
     """`_declaration_plan` of ``cls`` with the keys of its parameters and variables."""
     params, plain = _declaration_plan(cls)
-    return params, plain, tuple(p[0] for p in params), tuple(p[0] for p in plain)
+    var_keys = tuple(p[0] for p in plain)
+    return params, plain, tuple(p[0] for p in params), var_keys, \
+        dict(zip(var_keys, range(len(var_keys))))
 
 
 def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows):
@@ -907,7 +984,7 @@ class _Template:
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
                  "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
-                 "row_hints", "row_bases", "column")
+                 "row_hints", "row_bases", "column", "var_column")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=()):
@@ -924,6 +1001,8 @@ class _Template:
         self.equations: list = []   # FlatEquation of each instance, in order
         #: every instance's residuals stacked, instance after instance (`instantiate`)
         self.column: ca.SX | None = None
+        #: the column of the variables that instances' rows refer to (see `add`)
+        self.var_column: ca.SX | None = None
         #: each instance's first rows in the model's variables, its own then its ports',
         #: one instance after the other
         self.bases: list = []
@@ -966,17 +1045,35 @@ class _Template:
         """Add the instance ``el``; ``ders`` holds derivative symbols made beforehand
         (`_template_derivatives`), by variable name."""
         syms = el._syms
-        args = [syms[k] for k in self.keys]
         children = el._children
         state = flat.__dict__
         rows = state.get("_rows", {})
         bases = self.bases
         bases.append(rows.get(id(el), -1))
-        for port, keys in self.ports:
-            port = children[port]
-            psyms = port._syms
-            args += [psyms[k] for k in keys]
-            bases.append(rows.get(id(port), -1))
+        ports = [children[port] for port, _ in self.ports]
+        bases.extend([rows.get(id(port), -1) for port in ports])
+        own = [syms] + [port._syms for port in ports]
+        if self.var_rows is not None and all(type(s) is _ColumnSyms for s in own) and \
+                (self.var_column is None or syms.column is self.var_column) and \
+                all(s.column is syms.column for s in own):
+            # variables bound in bulk: each variable slot holds the variable's row in
+            # their column (`symbols` forms the symbols if a message needs them;
+            # `instantiate` takes them from the model's column by the rows in `bases`)
+            base = [s.base for s in own]
+            var_rows = self.var_rows
+            args = [base[var_rows[i][0]] + var_rows[i][1] if i in var_rows else syms[k]
+                    for i, k in enumerate(self.keys)]
+            i = len(args)
+            for psyms, (_, keys) in zip(own[1:], self.ports):
+                for k in keys:
+                    args.append(base[var_rows[i][0]] + var_rows[i][1] if i in var_rows
+                                else psyms[k])
+                    i += 1
+            self.var_column = syms.column
+        else:
+            args = [syms[k] for k in self.keys]
+            for psyms, (_, keys) in zip(own[1:], self.ports):
+                args += [psyms[k] for k in keys]
         owner = el._path_cache
         if self.derived:
             rel = self.relative
@@ -1027,10 +1124,15 @@ class _Template:
         width = self.svec.numel()
         columns = self._columns(flat, n, width)
         if columns is None:
-            flat_args = [a for args in self.instances for a in args]
+            flat_args = [a for args in self.instances for a in self.symbols(args)]
             columns = ca.reshape(ca.vertcat(*flat_args), width, n)
         out = self.fun.map(n)(columns) if n > 1 else self.fun(columns)
         self.column = ca.vec(out)       # column-major: instance after instance
+
+    def symbols(self, args: list) -> list:
+        """An instance's arguments as symbols: a variable slot that holds a row (see
+        `add`) read from the column of the variables."""
+        return [self.var_column[a] if type(a) is int else a for a in args]
 
     def _columns(self, flat: FlatModel, n: int, width: int):
         """The instances' arguments as a ``width`` x ``n`` matrix; the variable slots are
@@ -1120,7 +1222,8 @@ class _TemplateOrigin:
         self.where, self.template, self.args, self.k = where, template, args, k
 
     def _side(self, expr):
-        return ca.substitute(expr, self.template.svec, ca.vertcat(*self.args))
+        return ca.substitute(expr, self.template.svec,
+                             ca.vertcat(*self.template.symbols(self.args)))
 
     @property
     def lhs(self):
@@ -1151,7 +1254,7 @@ def _template(flat: FlatModel, el, templates: dict):
         return None
     saved = el._syms
     tsyms = {}
-    keys = list(saved)
+    keys = list(_filled(saved))
     own = []
     for k in keys:
         tsyms[k] = ca.SX.sym(f"{_TEMPLATE_PREFIX}.{k}")
@@ -1159,7 +1262,7 @@ def _template(flat: FlatModel, el, templates: dict):
     ports = []
     port_saved = {}
     for name, c in el._children.items():
-        port_saved[name] = c._syms
+        port_saved[name] = _filled(c._syms)
         csyms = {k: ca.SX.sym(f"{_TEMPLATE_PREFIX}.{name}.{k}") for k in c._syms}
         ports.append((name, list(c._syms)))
         own.extend(csyms.values())
@@ -1227,6 +1330,11 @@ def _template(flat: FlatModel, el, templates: dict):
                     variables, var_rows, par_slots)
     templates[cls] = tpl
     return tpl
+
+
+def _filled(syms):
+    """``syms`` with every symbol read (see `_ColumnSyms.filled`)."""
+    return syms.filled() if type(syms) is _ColumnSyms else syms
 
 
 def _discrete_states(flat: FlatModel, problems) -> None:

@@ -176,15 +176,17 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # lowering's variables are the unknowns, then their derivatives
     # (the scalars stacked apart: CasADi's vertcat of a column and 10^5 scalars costs
     # half as much again as the two steps)
-    stacked = (res_vec, ca.vertcat(flat.stack_variables(alias.unknowns),
-                                   ca.vertcat(*der_syms))) \
+    unknown_col = flat.stack_variables(alias.unknowns)
+    stacked = (res_vec, ca.vertcat(unknown_col, ca.vertcat(*der_syms))) \
         if residuals and not relations else None
     residuals = scanned
     plan = prepare_events(flat, alias, relations)
     lap("relations")
 
     variables = flat.variables
-    syms = [variables[n].sym for n in alias.unknowns]     # in the order of the unknowns
+    # in the order of the unknowns, split off their column (a variable's symbol is
+    # formed as a Python object only when read: see flatten._ColumnVariable)
+    syms = ca.vertsplit(unknown_col) if alias.unknowns else []
     p_value = _OnDemand(lambda: {q.sym.name(): q.value for q in params})
 
     def start_guess(free):
