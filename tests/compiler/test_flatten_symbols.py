@@ -4,6 +4,7 @@ from it, and the rows that templates read their instances' slots by. Checked aga
 symbols made one by one with ``casadi.SX.sym`` and against the model's own records."""
 
 import casadi as ca
+import numpy as np
 import pytest
 
 import mechatron as mt
@@ -40,6 +41,20 @@ def test_non_ascii_names_and_small_or_empty_columns():
     assert [s.name() for s in syms] == ["one", "two"]
     column, syms = fl._symbols([])
     assert column.shape == (0, 1) and syms == []
+
+
+def test_records_laid_out_in_bulk_match_casadi_for_any_lengths():
+    # ASCII names are laid out by NumPy (`_records`), others name by name: both give
+    # the text CasADi writes, for names of every length from empty to long, shuffled
+    rng = np.random.default_rng(7)
+    letters = np.array(list("abcxyz._0123456789"))
+    names = ["x" + "".join(rng.choice(letters, size=k)) for k in rng.permutation(
+        np.r_[0, 1, 2, rng.integers(3, 400, size=60)])] + [""]
+    expected = ca.vertcat(*[ca.SX.sym(n) for n in names]).serialize()
+    assert fl._serialized_column(names) == expected
+    mixed = names[:30] + ["\u00e9" * 3] + names[30:]
+    assert fl._serialized_column(mixed) == \
+        ca.vertcat(*[ca.SX.sym(n) for n in mixed]).serialize()
 
 
 def test_a_changed_layout_falls_back_to_one_symbol_per_call(monkeypatch):

@@ -631,13 +631,39 @@ def _serialized_column(names: list[str]) -> str:
     """CasADi's serialized text of the column of the symbols ``names``."""
     n = len(names)
     sparsity = np.concatenate([[4 + n, n, 1, 0, n], np.arange(n), [n]]).astype("<i8")
-    body = b"".join([_SX_RECORD + len(raw).to_bytes(4, "little") + raw
-                     for raw in [name.encode() for name in names]])
-    data = np.frombuffer(_SX_HEADER + sparsity.tobytes() + body, dtype=np.uint8)
+    data = np.frombuffer(_SX_HEADER + sparsity.tobytes() + _records(names),
+                         dtype=np.uint8)
     text = np.empty(2 * data.size, dtype=np.uint8)     # each byte as two letters a-p,
     text[0::2] = (data & 15) + 97                      # low half first
     text[1::2] = (data >> 4) + 97
     return text.tobytes().decode("ascii")
+
+
+def _records(names: list[str]) -> bytes:
+    """The records of the symbols ``names``: each the fixed prefix, the length of the
+    name in bytes (4 bytes, little-endian), the name (UTF-8). Names in ASCII (instance
+    paths) are laid out by NumPy, without a Python step per name."""
+    joined = "".join(names)
+    if not joined.isascii():
+        return b"".join([_SX_RECORD + len(raw).to_bytes(4, "little") + raw
+                         for raw in [name.encode() for name in names]])
+    n, head = len(names), len(_SX_RECORD) + 4
+    length = np.fromiter(map(len, names), dtype=np.int64, count=n)
+    start = np.zeros(n, dtype=np.int64)             # where each record starts
+    np.cumsum(length[:-1] + head, out=start[1:])
+    total = int(length.sum()) + head * n
+    # each record's head (prefix, length) where `is_head` is set, the names elsewhere
+    edge = np.zeros(total + 1, dtype=np.int8)
+    edge[start] = 1
+    edge[start + head] -= 1
+    is_head = np.cumsum(edge[:-1], dtype=np.int8).view(bool)
+    heads = np.empty((n, head), dtype=np.uint8)
+    heads[:, :len(_SX_RECORD)] = np.frombuffer(_SX_RECORD, dtype=np.uint8)
+    heads[:, len(_SX_RECORD):] = length.astype("<u4").view(np.uint8).reshape(n, 4)
+    out = np.empty(total, dtype=np.uint8)
+    out[is_head] = heads.ravel()
+    out[~is_head] = np.frombuffer(joined.encode("ascii"), dtype=np.uint8)
+    return out.tobytes()
 
 
 def _bulk_ok() -> bool:
