@@ -34,8 +34,13 @@ def _point(flat, rng):
 def test_removed_equations_hold_and_remaining_ones_are_substituted(build):
     flat = fl.flatten(build())
     flat_residuals = [eq.residual for eq in flat.equations]
-    alias_residuals = [flat.variables[a].sym - s * flat.variables[b].sym
+    names = list(flat.variables)     # a connection's alias names variables by number
+    sym = [v.sym for v in flat.variables.values()]
+    alias_residuals = [(sym[a] if isinstance(a, int) else flat.variables[a].sym) -
+                       s * (sym[b] if isinstance(b, int) else flat.variables[b].sym)
                        for a, b, s, _ in flat.aliases]
+    assert all(isinstance(x, str) and x in names or 0 <= x < len(names)
+               for a, b, *_ in flat.aliases for x in (a, b))
     result = eliminate_aliases(flat)
     # every variable kept or eliminated, once
     assert sorted(result.unknowns + list(result.eliminated)) == sorted(flat.variables)
@@ -82,10 +87,12 @@ def _classes_here(flat):
     constant."""
     edges: dict[str, set] = {n: set() for n in flat.variables}
     fixed = set()
+    names = list(flat.variables)      # aliases and hints may name variables by number
     for a, b, *_ in flat.aliases:
+        a = names[a] if isinstance(a, int) else a
+        b = names[b] if isinstance(b, int) else b
         edges[a].add(b)
         edges[b].add(a)
-    names = list(flat.variables)      # a template's hints name variables by number
     for eq in flat.equations:
         hint = eq.alias
         if hint is None or hint[0] == "none":

@@ -209,6 +209,26 @@ def test_numbered_alias_hints_name_the_variables_of_the_class_hint():
             assert given == expected
 
 
+def test_numbered_connection_aliases_name_members_of_their_set():
+    """A connection's alias by number names, through the model's variables, the same
+    variable of two members of its set; also after variables were moved back to their
+    place of declaration (a pin read by an equation) and with folded ports (by path)."""
+    from tests.compiler.test_folding import deep_ladder, reading_model
+    for build in (lambda: ladder(3), drive, deep_ladder, reading_model):
+        flat = fl.flatten(build())
+        names = list(flat.variables)
+        numbered = 0
+        for a, b, _, origin in flat.aliases:
+            if not origin.startswith("connect("):
+                continue                       # a signal connection: by path
+            members = origin[len("connect("):-1].split(", ")
+            pa, pb = (names[x] if isinstance(x, int) else x for x in (a, b))
+            numbered += isinstance(a, int)
+            assert pa.rsplit(".", 1)[1] == pb.rsplit(".", 1)[1], (pa, pb)
+            assert pa.rsplit(".", 1)[0] in members and pb.rsplit(".", 1)[0] in members
+        assert numbered
+
+
 def test_template_residuals_are_gathered_from_their_class_column():
     """`stack_residuals` gathers the rows of template equations from their classes'
     columns without forming each residual, and takes a residual set since as it is."""

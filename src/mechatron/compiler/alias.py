@@ -151,12 +151,14 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         return True
 
     redundant: list[FlatEquation] = []
-    for a, b, s, origin in flat.aliases:
-        ia, ib = number(a), number(b)
+    for a, b, s, origin in flat.aliases:     # by number, or by name
+        ia = a if type(a) is int else number(a)
+        ib = b if type(b) is int else number(b)
         if ia is None or ib is None:
             ia, ib = index[a], index[b]
         if not union(ia, ib, s):
-            redundant.append(FlatEquation(unknowns[a].sym - s * unknowns[b].sym, origin))
+            redundant.append(FlatEquation(unknowns[names[ia]].sym -
+                                          s * unknowns[names[ib]].sym, origin))
     kept = redundant
     keep = kept.append
     for eq in flat.equations:

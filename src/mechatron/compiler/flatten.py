@@ -377,6 +377,9 @@ def _declaration_order(flat: FlatModel) -> None:
         if hint is not None and hint[0] != "none" and type(hint[1]) is int:
             eq.alias = (hint[0], moved_to[hint[1]], moved_to[hint[2]], hint[3]) \
                 if hint[0] == "pair" else (hint[0], moved_to[hint[1]], hint[2])
+    flat.aliases = [(moved_to[a] if type(a) is int else a,
+                     moved_to[b] if type(b) is int else b, k, origin)
+                    for a, b, k, origin in flat.aliases]
     for port in flat.folded:        # still folded: after the ports declared before it
         port.position += sum(len(names) for position, k, names in late
                              if (position, k) < (port.position, port.order))
@@ -1671,24 +1674,39 @@ def _units_compatible(a: str, b: str) -> bool:
 
 
 def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
+    """The aliases (across variables equal; the through variables of two members
+    opposite) and the flow sum (of more members) of a physical connection set. The
+    variables are named by number (their rows among the model's variables) when every
+    member's port has its rows (bound in bulk, or bound late), else by path."""
     members = cset.members
     first = members[0]
     origin = "connect(" + ", ".join([m.path for m in members]) + ")"
-    across, through = _port_variables(type(first.port))
-    ports = [m for m in members if m.port is not first.port]  # a port is one node
+    cls = type(first.port)
+    across, through = _port_variables(cls)
+    others = [j for j, m in enumerate(members) if m.port is not first.port]  # one node
+    rows = flat.__dict__.get("_rows", {})
+    row = [rows.get(id(m.port), -1) for m in members]
+    if min(row) < 0:
+        row = [f"{m.path}." for m in members]       # by path: key appended
+        offsets = None
+    else:
+        offsets = _binding_plan(cls)[4]
+
+    def var(j, key):
+        return row[j] + offsets[key] if offsets is not None else row[j] + key
+
     aliases = flat.aliases
     for a in across:
-        target = f"{first.path}.{a}"
-        for m in ports:
-            aliases.append((f"{m.path}.{a}", target, 1.0, origin))
+        target = var(0, a)
+        for j in others:
+            aliases.append((var(j, a), target, 1.0, origin))
     for t in through:
-        if len(members) == 2 and ports:
+        if len(members) == 2 and others:
             # first.sign * first.t + m.sign * m.t == 0
-            m = ports[0]
-            aliases.append((f"{m.path}.{t}", f"{first.path}.{t}",
-                            -first.sign * m.sign, origin))
+            j = others[0]
+            aliases.append((var(j, t), var(0, t), -first.sign * members[j].sign, origin))
         else:   # formed in bulk by _flow_sums
-            flow_sums.append(([(f"{m.path}.{t}", m.sign) for m in members],
+            flow_sums.append(([(var(j, t), m.sign) for j, m in enumerate(members)],
                               f"{origin}: sum of {t} == 0"))
 
 
@@ -1704,7 +1722,7 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
     all, not one per term)."""
     if not flow_sums:
         return
-    index: dict[str, int] = {}
+    index: dict = {}        # each variable (by number or by path) -> its column in A
     rows, cols, vals = [], [], []
     for r, (terms, _) in enumerate(flow_sums):
         for name, sign in terms:
@@ -1712,7 +1730,8 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
             cols.append(index.setdefault(name, len(index)))
             vals.append(sign)
     A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
-    x = flat.stack_variables(index)
+    column, number = flat._stacked()
+    x = column[[name if type(name) is int else number[name] for name in index]]
     for (_, origin), residual in zip(flow_sums, ca.vertsplit(ca.mtimes(A, x))):
         flat.equations.append(FlatEquation(residual, origin))
 
