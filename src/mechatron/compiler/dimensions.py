@@ -501,6 +501,11 @@ def dimension_problems(flat, model=None) -> list[str]:
 
 
 def _checked(eq) -> bool:
+    """Whether the dimensions of ``eq`` are checked: a class template's equations once,
+    in its first instance (read off its row, without forming its origin)."""
+    row = getattr(eq, "row", None)
+    if row is not None and getattr(eq, "template", None) is not None:
+        return row < eq.template.n_eq
     template = getattr(eq.origin, "template", None)
     return template is None or eq.origin.args is template.instances[0]
 

@@ -124,26 +124,44 @@ class FlatEquation:
     alias: tuple | None = None
 
 
-_RESIDUAL_SLOT = FlatEquation.__dict__["residual"]     # the slot, under the property
+_RESIDUAL_SLOT = FlatEquation.__dict__["residual"]     # the slots, under the properties
+_ORIGIN_SLOT = FlatEquation.__dict__["origin"]
 
 
 class _TemplateEquation(FlatEquation):
     """An equation of a `_Template` instance: its residual is the row ``row`` of its
     class's stacked residuals (`_Template.column`), formed as a scalar only when read.
     Alias elimination gathers the rows it keeps from the columns instead
-    (`stack_residuals`): no Python object per equation on the way."""
+    (`stack_residuals`): no Python object per equation on the way. Its origin (a
+    `_TemplateOrigin`) is likewise formed when read."""
 
-    __slots__ = ("row",)
+    __slots__ = ("row", "template")
 
-    def __init__(self, origin, owner, alias, row):
+    def __init__(self, template, owner, alias, row):
         _RESIDUAL_SLOT.__set__(self, None)
-        self.origin, self.owner, self.alias, self.row = origin, owner, alias, row
+        _ORIGIN_SLOT.__set__(self, None)
+        self.template, self.owner, self.alias, self.row = template, owner, alias, row
+
+    @property
+    def origin(self):
+        o = _ORIGIN_SLOT.__get__(self)
+        if o is None:
+            tpl = self.template
+            instance, k = divmod(self.row, tpl.n_eq)
+            o = _TemplateOrigin(self.owner or tpl.model_name, tpl,
+                                tpl.instances[instance], k)
+            _ORIGIN_SLOT.__set__(self, o)
+        return o
+
+    @origin.setter
+    def origin(self, value):
+        _ORIGIN_SLOT.__set__(self, value)
 
     @property
     def residual(self):
         r = _RESIDUAL_SLOT.__get__(self)
         if r is None:
-            column = self.origin.template.column
+            column = self.template.column
             if column is None:                  # not instantiated yet
                 return None
             r = column[self.row]
@@ -163,7 +181,7 @@ def stack_residuals(eqs) -> ca.SX:
     columns, loose, where = [], [], []
     for eq in eqs:
         if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None:
-            tpl = eq.origin.template
+            tpl = eq.template
             k = parts.get(tpl)
             if k is None:
                 k = parts[tpl] = len(columns)
@@ -940,7 +958,7 @@ def _collect_equations(flat: FlatModel, elements, problems,
         if tpl is not None:
             if "equations" in vars(type(el)) and _has_time_scales(type(el)):
                 flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
-            tpl.add(flat, el, where, ders)
+            tpl.add(flat, el, ders)
             continue
         for klass, items in _class_calls(el, "equations", where):
             if klass is type(el):
@@ -1013,7 +1031,7 @@ class _Template:
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
                  "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
-                 "row_hints", "row_bases", "column", "var_column")
+                 "row_hints", "row_bases", "column", "var_column", "model_name")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=()):
@@ -1032,6 +1050,7 @@ class _Template:
         self.column: ca.SX | None = None
         #: the column of the variables that instances' rows refer to (see `add`)
         self.var_column: ca.SX | None = None
+        self.model_name = ""
         #: each instance's first rows in the model's variables, its own then its ports',
         #: one instance after the other
         self.bases: list = []
@@ -1070,7 +1089,7 @@ class _Template:
                               for p in self.aliases]
             self.row_bases = sorted({var_rows[i][0] for i in read})    # bases read
 
-    def add(self, flat: FlatModel, el, where: str, ders=None) -> None:
+    def add(self, flat: FlatModel, el, ders=None) -> None:
         """Add the instance ``el``; ``ders`` holds derivative symbols made beforehand
         (`_template_derivatives`), by variable name."""
         syms = el._syms
@@ -1139,8 +1158,8 @@ class _Template:
         else:
             hints = self.root_hints
         first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
-        eqs = [_TemplateEquation(_TemplateOrigin(where, self, args, k), owner, hint,
-                                 first + k)
+        self.model_name = flat.name        # where an equation of the root is
+        eqs = [_TemplateEquation(self, owner, hint, first + k)
                for k, hint in enumerate(hints)]
         self.equations.append(eqs)
         flat.equations += eqs
