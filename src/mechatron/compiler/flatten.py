@@ -1031,7 +1031,8 @@ class _Template:
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
                  "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
-                 "row_hints", "row_bases", "column", "var_column", "model_name")
+                 "row_hints", "row_bases", "column", "var_column", "model_name",
+                 "slots", "slot_keys")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=()):
@@ -1051,6 +1052,13 @@ class _Template:
         #: the column of the variables that instances' rows refer to (see `add`)
         self.var_column: ca.SX | None = None
         self.model_name = ""
+        #: each slot of `relative` as (which symbols: 0 the element's, 1 + j port j's;
+        #: key), and as (is a variable, which, its row after the first variable's if a
+        #: variable, else its key): how `add` reads an instance's arguments
+        self.slot_keys = [(0, k) for k in keys] + \
+            [(1 + j, k) for j, (_, ks) in enumerate(ports) for k in ks]
+        self.slots = [(True, *var_rows[i]) if var_rows is not None and i in var_rows
+                      else (False, w, k) for i, (w, k) in enumerate(self.slot_keys)]
         #: each instance's first rows in the model's variables, its own then its ports',
         #: one instance after the other
         self.bases: list = []
@@ -1101,27 +1109,18 @@ class _Template:
         ports = [children[port] for port, _ in self.ports]
         bases.extend([rows.get(id(port), -1) for port in ports])
         own = [syms] + [port._syms for port in ports]
-        if self.var_rows is not None and all(type(s) is _ColumnSyms for s in own) and \
-                (self.var_column is None or syms.column is self.var_column) and \
-                all(s.column is syms.column for s in own):
+        column = getattr(syms, "column", None)
+        if self.var_rows is not None and column is not None and \
+                (self.var_column is None or column is self.var_column) and \
+                all(type(s) is _ColumnSyms and s.column is column for s in own):
             # variables bound in bulk: each variable slot holds the variable's row in
             # their column (`symbols` forms the symbols if a message needs them;
             # `instantiate` takes them from the model's column by the rows in `bases`)
             base = [s.base for s in own]
-            var_rows = self.var_rows
-            args = [base[var_rows[i][0]] + var_rows[i][1] if i in var_rows else syms[k]
-                    for i, k in enumerate(self.keys)]
-            i = len(args)
-            for psyms, (_, keys) in zip(own[1:], self.ports):
-                for k in keys:
-                    args.append(base[var_rows[i][0]] + var_rows[i][1] if i in var_rows
-                                else psyms[k])
-                    i += 1
-            self.var_column = syms.column
+            args = [base[w] + x if is_var else own[w][x] for is_var, w, x in self.slots]
+            self.var_column = column
         else:
-            args = [syms[k] for k in self.keys]
-            for psyms, (_, keys) in zip(own[1:], self.ports):
-                args += [psyms[k] for k in keys]
+            args = [own[w][k] for w, k in self.slot_keys]
         owner = el._path_cache
         if self.derived:
             rel = self.relative
