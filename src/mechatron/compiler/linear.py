@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
+from itertools import chain
 
 import casadi as ca
 import numpy as np
@@ -199,43 +200,37 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     jac = jacobian if jacobian is not None else sparse_jacobian(
         *(stacked if stacked is not None else (ca.vertcat(*res), ca.vertcat(*var_syms))),
         sparsity)
-    rows, cols = jac.sparsity().get_triplet()
-    const: list[set[int]] = [set() for _ in res]
-    linear: list[dict] = [{} for _ in res]
+    rows, cols = (np.asarray(a, dtype=np.int64) for a in jac.sparsity().get_triplet())
     values = _numbers(jac)
-    number = ~np.isnan(values)
-    for r, c, value in zip(np.asarray(rows)[number].tolist(),
-                           np.asarray(cols)[number].tolist(), values[number].tolist()):
-        const[r].add(c)
-        if value:   # exact(value), inline
-            linear[r][c] = int(value) if value.is_integer() else Fraction(value)
-    symbolic = np.flatnonzero(~number).tolist()
+    fixed = ~np.isnan(values)        # a coefficient free of unknowns: a number, ...
+    take = np.flatnonzero(fixed & (values != 0))
+    coefs = _exact_numbers(values[take])
+    symbolic = np.flatnonzero(~fixed).tolist()
     atoms: list = []
-    if parameters and symbolic:
-        for k, a in _parameter_coefficients(ca.vertsplit(jac.nz[symbolic]),
-                                            parameters, atoms):
-            k = symbolic[k]
-            const[rows[k]].add(cols[k])
-            if a:
-                linear[rows[k]][cols[k]] = a
+    if parameters and symbolic:      # ... or an expression of the parameters alone
+        found = list(_parameter_coefficients(ca.vertsplit(jac.nz[symbolic]),
+                                             parameters, atoms))
+        fixed[[symbolic[k] for k, _ in found]] = True
+        by_parameters = [(symbolic[k], a) for k, a in found if a]
+        if by_parameters:
+            take = np.concatenate([take, np.array([k for k, _ in by_parameters],
+                                                  dtype=np.int64)])
+            coefs += [a for _, a in by_parameters]
+    const = _Columns(len(res), rows[fixed], cols[fixed])
+    linear = _linear_rows(len(res), rows[take], cols[take], coefs)
     eliminable = [d == -1 for d in var_to_diff]
     nonlinear = {}
 
     def other_terms(k: int) -> list[int]:
         if k not in nonlinear:
-            nonlinear[k] = [v for v in adj[k] if v not in const[k]]
+            own = const[k]
+            nonlinear[k] = [v for v in adj[k] if v not in own]
         return nonlinear[k]
 
     # the purely linear equations: every unknown in them has a numeric coefficient
     # (Kirchhoff's laws, v = p.v - n.v, v = V(t)); only their combinations cancel
     # exactly, the other terms of c.i == C*der(c.v) are taken as generic
-    pure = []
-    for e, (row, fixed) in enumerate(zip(adj, const)):
-        for v in row:
-            if eliminable[v] and v not in fixed:
-                break
-        else:
-            pure.append(e)
+    pure = _purely_linear(adj, eliminable, const, n)
     elim = exact_elimination(linear, eliminable, rows=pure)
     out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac)
     for e, row in elim.rows.items():
@@ -250,6 +245,67 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     _check_dependencies(name, res, orig, var_syms, var_names, eliminable, out,
                         linear, roles or {}, classes or {}, n)
     return out
+
+
+def _exact_numbers(values: np.ndarray) -> list:
+    """`exact` of each of ``values`` (``int`` where integral, else ``Fraction``): the
+    integral ones of fewer than 63 bits converted by NumPy at once."""
+    out = np.zeros(values.size, dtype=np.int64)
+    whole = np.isfinite(values) & (np.abs(values) < 2.0 ** 62)
+    whole[whole] = values[whole] == np.floor(values[whole])
+    out[whole] = values[whole]
+    coefs = out.tolist()
+    for k in np.flatnonzero(~whole).tolist():
+        v = float(values[k])
+        coefs[k] = int(v) if v.is_integer() else Fraction(v)
+    return coefs
+
+
+class _Columns:
+    """``const[e]``: the set of columns in which equation ``e`` is linear with a
+    coefficient free of unknowns, formed on request from the entries ``(rows, cols)``
+    (every equation's in one pair of arrays, not a set per equation)."""
+
+    __slots__ = ("_ptr", "_cols")
+
+    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray):
+        order = np.lexsort((cols, rows))
+        self._cols = cols[order]
+        self._ptr = np.searchsorted(rows[order], np.arange(n + 1)).tolist()
+
+    def __len__(self) -> int:
+        return len(self._ptr) - 1
+
+    def __getitem__(self, e: int) -> set[int]:
+        return set(self._cols[self._ptr[e]:self._ptr[e + 1]].tolist())
+
+    def keys(self, n_col: int) -> np.ndarray:
+        """Every entry as ``e * n_col + column``, sorted."""
+        rows = np.repeat(np.arange(len(self), dtype=np.int64), np.diff(self._ptr))
+        return rows * n_col + self._cols
+
+
+def _linear_rows(n: int, rows: np.ndarray, cols: np.ndarray, coefs: list) -> list[dict]:
+    """``linear[e]``: column -> coefficient of the entries ``(rows, cols, coefs)``, each
+    row's in the order given (one dictionary per equation, made from slices)."""
+    order = np.argsort(rows, kind="stable")
+    ptr = np.searchsorted(rows[order], np.arange(n + 1)).tolist()
+    col = cols[order].tolist()
+    coef = [coefs[k] for k in order.tolist()]
+    return [dict(zip(col[a:b], coef[a:b])) if a != b else {}
+            for a, b in zip(ptr, ptr[1:])]
+
+
+def _purely_linear(adj, eliminable, const: _Columns, n_col: int) -> list[int]:
+    """The equations in which every eliminable variable of ``adj`` is in ``const``."""
+    length = np.fromiter(map(len, adj), dtype=np.int64, count=len(adj))
+    if not length.sum():
+        return list(range(len(adj)))
+    col = np.fromiter(chain.from_iterable(adj), dtype=np.int64, count=int(length.sum()))
+    row = np.repeat(np.arange(len(adj), dtype=np.int64), length)
+    bad = np.asarray(eliminable, dtype=bool)[col]
+    bad[bad] = ~np.isin(row[bad] * n_col + col[bad], const.keys(n_col))
+    return np.flatnonzero(np.bincount(row[bad], minlength=len(adj)) == 0).tolist()
 
 
 def _numbers(jac: ca.SX) -> np.ndarray:

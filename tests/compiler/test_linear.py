@@ -1,0 +1,72 @@
+"""The arrays behind `mechatron.compiler.linear.reveal`: the exact coefficients, the
+columns with coefficients free of unknowns, each equation's linear part and the purely
+linear equations, read off the Jacobian's entries in bulk. Checked against the same
+quantities written here entry by entry, on scrambled random entries."""
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+import mechatron.compiler.linear as lin
+
+
+def _entries(rng, n_rows, n_cols, density=0.2):
+    """Random entries in CasADi's column-major order, with numbers (integral, zero,
+    fractional, large) and NaN for a coefficient that depends on unknowns."""
+    mask = rng.random((n_rows, n_cols)) < density
+    cols, rows = np.nonzero(mask.T)                 # column by column, as get_triplet
+    kind = rng.integers(0, 6, size=rows.size)
+    values = np.where(kind == 0, np.nan,
+             np.where(kind == 1, 0.0,
+             np.where(kind == 2, rng.integers(-3, 4, size=rows.size).astype(float),
+             np.where(kind == 3, rng.normal(size=rows.size),
+             np.where(kind == 4, 2.0 ** 70, -1.0)))))
+    return rows.astype(np.int64), cols.astype(np.int64), values
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_bulk_arrays_equal_the_entry_by_entry_reading(seed):
+    rng = np.random.default_rng(seed)
+    n_rows, n_cols = 40, 30
+    rows, cols, values = _entries(rng, n_rows, n_cols)
+    # coefficients given by parameters for some of the NaN entries, found later
+    symbolic = np.flatnonzero(np.isnan(values))
+    by_parameters = [(int(k), f"a{k}") for k in symbolic[::2]]
+
+    # entry by entry, as reveal read them before
+    const = [set() for _ in range(n_rows)]
+    linear = [{} for _ in range(n_rows)]
+    for r, c, v in zip(rows.tolist(), cols.tolist(), values.tolist()):
+        if np.isnan(v):
+            continue
+        const[r].add(c)
+        if v:
+            linear[r][c] = int(v) if v.is_integer() else Fraction(v)
+    for k, a in by_parameters:
+        const[rows[k]].add(cols[k])
+        linear[rows[k]][cols[k]] = a
+    adj = [sorted(set(cols[rows == r].tolist()) | set(rng.choice(n_cols, 2).tolist()))
+           for r in range(n_rows)]
+    eliminable = (rng.random(n_cols) < 0.6).tolist()
+    pure = [e for e in range(n_rows)
+            if all(not eliminable[v] or v in const[e] for v in adj[e])]
+
+    # in bulk
+    fixed = ~np.isnan(values)
+    take = np.flatnonzero(fixed & (values != 0))
+    coefs = lin._exact_numbers(values[take])
+    assert all(type(c) is (int if float(v).is_integer() else Fraction)
+               for c, v in zip(coefs, values[take]))
+    fixed[[k for k, _ in by_parameters]] = True
+    take = np.concatenate([take, np.array([k for k, _ in by_parameters], dtype=np.int64)])
+    coefs += [a for _, a in by_parameters]
+    bulk_const = lin._Columns(n_rows, rows[fixed], cols[fixed])
+    bulk_linear = lin._linear_rows(n_rows, rows[take], cols[take], coefs)
+
+    assert len(bulk_const) == n_rows
+    assert [bulk_const[e] for e in range(n_rows)] == const
+    # the same coefficients, each row's columns in the same order (numbers by column,
+    # then the parameters' by column): the exact elimination's ties follow this order
+    assert [list(d.items()) for d in bulk_linear] == [list(d.items()) for d in linear]
+    assert lin._purely_linear(adj, eliminable, bulk_const, n_cols) == pure
