@@ -192,6 +192,12 @@ def stack_residuals(eqs) -> ca.SX:
             loose.append(eq.residual)
     if not where:
         return ca.SX(0, 1)
+    return _gather(columns, loose, where)
+
+
+def _gather(columns: list, loose: list, where: list) -> ca.SX:
+    """The rows ``where`` of the ``columns`` and ``loose`` scalars stacked, by one index:
+    ``(k, r)`` is row ``r`` of ``columns[k]``, or ``loose[r]`` for ``k == -1``."""
     if not columns:
         return ca.vertcat(*loose)
     offset = np.cumsum([0] + [c.numel() for c in columns]).tolist()
@@ -450,11 +456,7 @@ def _gathered(records) -> ca.SX:
         else:
             where.append((-1, len(loose)))
             loose.append(v.sym)
-    if not columns:
-        return ca.vertcat(*loose)
-    offset = np.cumsum([0] + [c.numel() for c in columns]).tolist()
-    index = [offset[k] + r if k >= 0 else offset[-1] + r for k, r in where]
-    return ca.vertcat(*columns, *loose)[index]
+    return _gather(columns, loose, where)
 
 
 class _ColumnSyms(dict):
