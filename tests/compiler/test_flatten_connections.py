@@ -62,3 +62,39 @@ def test_ports_of_two_connector_classes_connect_variable_by_variable(three_membe
     # the current through the resistor is the capacitors' charging current
     np.testing.assert_allclose(res["r.p.i"], V / R * np.exp(-t / (R * C)),
                                rtol=1e-5, atol=1e-7)
+
+
+class Wrapped(mt.Component):
+    """A library resistor behind pins of the other class: each of its nodes joins a
+    `ThroughFirstPin` with `Pin`s, inside and outside."""
+
+    p = ThroughFirstPin(doc="Positive pin")
+    n = ThroughFirstPin(doc="Negative pin")
+    r = el.Resistor(R=2.0)
+
+    def equations(self):
+        return [mt.connect(self.p, self.r.p), mt.connect(self.r.n, self.n)]
+
+
+def test_a_subsystem_port_of_another_connector_class_carries_its_own_variables():
+    """The logged potential and current of each port are its own: the source voltage and
+    the charging current at w.p, the capacitor voltage and the current back at w.n."""
+    V, R, C = 3.0, 2.0, 0.5
+    m = mt.System("wrapped")
+    src = m.add("src", el.DCVoltageSource(V=V))
+    g = m.add("g", el.ElectricalReference())
+    w = m.add("w", Wrapped())
+    c = m.add("c", el.Capacitor(C=C))
+    m.connect(src.p, w.p)
+    m.connect(w.n, c.p)
+    m.connect(c.n, src.n, g.port)
+    res = mt.simulate(m, 2.0, t_out=np.linspace(0, 2, 5), rtol=1e-9, atol=1e-12,
+                      log="all")
+    t = np.asarray(res.t)
+    v_c = V * (1 - np.exp(-t / (R * C)))
+    current = (V - v_c) / R
+    np.testing.assert_allclose(res["c.v"], v_c, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(res["w.p.v"], V, rtol=1e-12)
+    np.testing.assert_allclose(res["w.p.i"], current, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(res["w.n.v"], v_c, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(res["w.n.i"], -current, rtol=1e-5, atol=1e-7)
