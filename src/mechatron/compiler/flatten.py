@@ -1697,7 +1697,9 @@ def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
     """The aliases (across variables equal; the through variables of two members
     opposite) and the flow sum (of more members) of a physical connection set. The
     variables are named by number (their rows among the model's variables) when every
-    member's port has its rows (bound in bulk, or bound late), else by path."""
+    member's port has its rows (bound in bulk, or bound late) and is of the first's
+    class (the place of a key among its port's variables is its class's), else by
+    path."""
     members = cset.members
     first = members[0]
     origin = "connect(" + ", ".join([m.path for m in members]) + ")"
@@ -1706,7 +1708,7 @@ def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
     others = [j for j, m in enumerate(members) if m.port is not first.port]  # one node
     rows = flat.__dict__.get("_rows", {})
     row = [rows.get(id(m.port), -1) for m in members]
-    if min(row) < 0:
+    if min(row) < 0 or any(type(m.port) is not cls for m in members):
         row = [f"{m.path}." for m in members]       # by path: key appended
         offsets = None
     else:
