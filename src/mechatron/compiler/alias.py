@@ -154,8 +154,10 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     for a, b, s, origin in flat.aliases:     # by number, or by name
         ia = a if type(a) is int else number(a)
         ib = b if type(b) is int else number(b)
-        if ia is None or ib is None:
-            ia, ib = index[a], index[b]
+        if ia is None:              # a name that is not a variable: numbered on first use
+            ia = index[a]
+        if ib is None:
+            ib = index[b]
         if not union(ia, ib, s):
             redundant.append(FlatEquation(unknowns[names[ia]].sym -
                                           s * unknowns[names[ib]].sym, origin))
