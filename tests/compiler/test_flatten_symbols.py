@@ -11,6 +11,7 @@ import mechatron as mt
 import mechatron.compiler.flatten as fl
 from mechatron.library import electrical as el
 
+from tests.compiler.test_flatten_templates import ladder
 from tests.compiler.test_folding import reading_model
 from tests.compiler.test_hierarchy import Pair
 
@@ -141,19 +142,7 @@ def test_template_instances_take_their_variables_by_row():
     """A class template's instance holds each variable slot as the variable's row in
     the column of all variables: the symbols it stands for are the instance's own, by
     path, and no symbol of those variables is formed one by one while flattening."""
-    m = mt.System("ladder")
-    src = m.add("src", el.DCVoltageSource(V=1.0))
-    g = m.add("g", el.ElectricalReference())
-    m.connect(src.n, g.port)
-    node = src.p
-    for k in range(4):
-        r = m.add(f"r{k}", el.Resistor(R=1.0 + k))
-        c = m.add(f"c{k}", el.Capacitor(C=1e-3))
-        m.connect(node, r.p)
-        m.connect(r.n, c.p)
-        m.connect(c.n, g.port)
-        node = r.n
-    flat = fl.flatten(m)
+    flat = fl.flatten(ladder(4))
     templates = {eq.template for eq in flat.equations if isinstance(eq, fl._TemplateEquation)}
     assert {type(t) for t in templates} == {fl._Template} and len(templates) >= 2
     held = 0
@@ -166,4 +155,4 @@ def test_template_instances_take_their_variables_by_row():
     # the variables of the template instances were taken by row, never formed alone
     formed = [n for n, v in flat.variables.items()
               if isinstance(v, fl._ColumnVariable) and fl._SYM_SLOT.__get__(v) is not None]
-    assert not [n for n in formed if n.startswith(("r", "c"))]
+    assert not [n for n in formed if n.startswith(("r", "c", "l"))]
