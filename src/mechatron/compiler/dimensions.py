@@ -54,7 +54,7 @@ from itertools import repeat
 import casadi as ca
 
 from mechatron.compiler.flatten import (FlatModel, _bind_symbols, _collect_equations,
-                                        _walk)
+                                        _TemplateEquation, _walk)
 from mechatron.core.component import Component
 from mechatron.core.context import BuildContext
 from mechatron.core.events import Clock
@@ -503,11 +503,7 @@ def dimension_problems(flat, model=None) -> list[str]:
 def _checked(eq) -> bool:
     """Whether the dimensions of ``eq`` are checked: a class template's equations once,
     in its first instance (read off its row, without forming its origin)."""
-    row = getattr(eq, "row", None)
-    if row is not None and getattr(eq, "template", None) is not None:
-        return row < eq.template.n_eq
-    template = getattr(eq.origin, "template", None)
-    return template is None or eq.origin.args is template.instances[0]
+    return type(eq) is not _TemplateEquation or eq.row < eq.template.n_eq
 
 
 def check_dimensions(flat, model=None) -> None:

@@ -177,29 +177,29 @@ def stack_residuals(eqs) -> ca.SX:
     """``vertcat`` of the residuals of ``eqs``: the rows of template equations gathered
     from their classes' columns by one index (a residual set since, e.g. by `pre`'s
     replacement, is taken as it is), the others stacked."""
-    parts: dict = {}            # template -> its number among the columns
+    return _gather((eq.template.column, eq.row)
+                   if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None
+                   else (None, eq.residual) for eq in eqs)
+
+
+def _gather(items) -> ca.SX:
+    """The scalars ``items`` stacked, each ``(column, row)``, row ``row`` of ``column``,
+    or ``(None, scalar)``: the rows gathered from their columns by one index, the loose
+    scalars stacked after them."""
+    parts: dict = {}            # id(column) -> its number among the columns
     columns, loose, where = [], [], []
-    for eq in eqs:
-        if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None:
-            tpl = eq.template
-            k = parts.get(tpl)
-            if k is None:
-                k = parts[tpl] = len(columns)
-                columns.append(tpl.column)
-            where.append((k, eq.row))
-        else:
+    for column, item in items:
+        if column is None:
             where.append((-1, len(loose)))
-            loose.append(eq.residual)
-    if not where:
-        return ca.SX(0, 1)
-    return _gather(columns, loose, where)
-
-
-def _gather(columns: list, loose: list, where: list) -> ca.SX:
-    """The rows ``where`` of the ``columns`` and ``loose`` scalars stacked, by one index:
-    ``(k, r)`` is row ``r`` of ``columns[k]``, or ``loose[r]`` for ``k == -1``."""
+            loose.append(item)
+            continue
+        k = parts.get(id(column))
+        if k is None:
+            k = parts[id(column)] = len(columns)
+            columns.append(column)
+        where.append((k, item))
     if not columns:
-        return ca.vertcat(*loose)
+        return ca.vertcat(*loose) if loose else ca.SX(0, 1)
     offset = np.cumsum([0] + [c.numel() for c in columns]).tolist()
     index = [offset[k] + r if k >= 0 else offset[-1] + r for k, r in where]
     return ca.vertcat(*columns, *loose)[index]
@@ -444,19 +444,9 @@ def _summary(name: str, problems: list[str]) -> str:
 def _gathered(records) -> ca.SX:
     """``vertcat`` of the symbols of ``records``: those still in a column
     (`_ColumnVariable`) gathered from it by one index, the others stacked."""
-    parts: dict = {}            # id(column) -> its number among the columns
-    columns, loose, where = [], [], []
-    for v in records:
-        if type(v) is _ColumnVariable and _SYM_SLOT.__get__(v) is None:
-            k = parts.get(id(v.column))
-            if k is None:
-                k = parts[id(v.column)] = len(columns)
-                columns.append(v.column)
-            where.append((k, v.row))
-        else:
-            where.append((-1, len(loose)))
-            loose.append(v.sym)
-    return _gather(columns, loose, where)
+    return _gather((v.column, v.row)
+                   if type(v) is _ColumnVariable and _SYM_SLOT.__get__(v) is None
+                   else (None, v.sym) for v in records)
 
 
 class _ColumnSyms(dict):
@@ -1037,7 +1027,7 @@ class _Template:
                  "slots", "slot_keys")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
-                 par_slots=()):
+                 par_slots=(), model_name=""):
         self.keys = keys            # own declaration keys, in template order
         self.ports = ports          # [(port name, [keys])]
         self.derived = derived      # template positions whose derivative appears
@@ -1053,7 +1043,7 @@ class _Template:
         self.column: ca.SX | None = None
         #: the column of the variables that instances' rows refer to (see `add`)
         self.var_column: ca.SX | None = None
-        self.model_name = ""
+        self.model_name = model_name   # where an equation of the root is
         #: each slot of `relative` as (which symbols: 0 the element's, 1 + j port j's;
         #: key), and as (is a variable, which, its row after the first variable's if a
         #: variable, else its key): how `add` reads an instance's arguments
@@ -1159,7 +1149,6 @@ class _Template:
         else:
             hints = self.root_hints
         first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
-        self.model_name = flat.name        # where an equation of the root is
         eqs = [_TemplateEquation(self, owner, hint, first + k)
                for k, hint in enumerate(hints)]
         self.equations.append(eqs)
@@ -1376,7 +1365,7 @@ def _template(flat: FlatModel, el, templates: dict):
             list(par_slots) != list(range(len(par_slots))):
         par_slots = ()                  # not laid out as bound: stacked one by one
     tpl = _Template(keys, ports, derived, own + ders + [flat.context.time], lhs, rhs,
-                    variables, var_rows, par_slots)
+                    variables, var_rows, par_slots, flat.name)
     templates[cls] = tpl
     return tpl
 
