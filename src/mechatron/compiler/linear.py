@@ -256,8 +256,7 @@ def _exact_numbers(values: np.ndarray) -> list:
     out[whole] = values[whole]
     coefs = out.tolist()
     for k in np.flatnonzero(~whole).tolist():
-        v = float(values[k])
-        coefs[k] = int(v) if v.is_integer() else Fraction(v)
+        coefs[k] = exact(float(values[k]))
     return coefs
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mechatron.core.component import Connector, Element, SignalRef
+from mechatron.core.component import SignalRef
 from mechatron.core.declarations import Input, Output
 
 __all__ = ["Member", "ConnectionSet", "connection_sets", "is_driver", "port_key",
