@@ -1685,26 +1685,24 @@ def _units_compatible(a: str, b: str) -> bool:
 def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
     """The aliases (across variables equal; the through variables of two members
     opposite) and the flow sum (of more members) of a physical connection set. The
-    variables are named by number (their rows among the model's variables) when every
-    member's port has its rows (bound in bulk, or bound late) and is of the first's
-    class (the place of a key among its port's variables is its class's), else by
-    path."""
+    variables are named by number when every member's port has its rows (bound in bulk,
+    or bound late): the port's row plus the key's place among its own class's
+    variables; else by path."""
     members = cset.members
     first = members[0]
     origin = "connect(" + ", ".join([m.path for m in members]) + ")"
-    cls = type(first.port)
-    across, through = _port_variables(cls)
+    across, through = _port_variables(type(first.port))
     others = [j for j, m in enumerate(members) if m.port is not first.port]  # one node
     rows = flat.__dict__.get("_rows", {})
     row = [rows.get(id(m.port), -1) for m in members]
-    if min(row) < 0 or any(type(m.port) is not cls for m in members):
+    offsets = [_binding_plan(type(m.port))[4] for m in members]   # one per class
+    if min(row) < 0 or any(o is not offsets[0] and any(k not in o for k in across + through)
+                           for o in offsets):
         row = [f"{m.path}." for m in members]       # by path: key appended
         offsets = None
-    else:
-        offsets = _binding_plan(cls)[4]
 
     def var(j, key):
-        return row[j] + offsets[key] if offsets is not None else row[j] + key
+        return row[j] + offsets[j][key] if offsets is not None else row[j] + key
 
     aliases = flat.aliases
     for a in across:
