@@ -34,6 +34,17 @@ def test_bulk_symbols_carry_the_given_names_in_order():
     assert fl._serialized_column(NAMES) == one_by_one.serialize()
 
 
+@pytest.mark.parametrize("per_text", [4, 11, 1000])
+def test_symbols_made_in_pieces_are_one_column_in_order(monkeypatch, per_text):
+    monkeypatch.setattr(fl, "_SYMBOLS_PER_TEXT", per_text)
+    names = [f"{n}.{k}" for k in range(3) for n in NAMES]
+    column, syms = fl._symbols(names)
+    assert column.shape == (len(names), 1)
+    assert [s.name() for s in syms] == names
+    assert len(ca.symvar(column)) == len(names)
+    assert all(ca.is_equal(column[k], s) for k, s in enumerate(syms))
+
+
 def test_non_ascii_names_and_small_or_empty_columns():
     names = ["\u00e9t\u00e9.v", "\u03c9.w", "plain"] * 4
     column, syms = fl._symbols(names)

@@ -70,3 +70,10 @@ def test_bulk_arrays_equal_the_entry_by_entry_reading(seed):
     # then the parameters' by column): the exact elimination's ties follow this order
     assert [list(d.items()) for d in bulk_linear] == [list(d.items()) for d in linear]
     assert lin._purely_linear(adj, eliminable, bulk_const, n_cols) == pure
+
+    # when the incidence is the entries' own pattern, read off the entries alone
+    own = [sorted(cols[rows == r].tolist()) for r in range(n_rows)]
+    own_pure = [e for e in range(n_rows)
+                if all(not eliminable[v] or v in const[e] for v in own[e])]
+    assert lin._purely_linear_entries(rows, cols, fixed, eliminable, n_rows) == own_pure
+    assert lin._purely_linear(own, eliminable, bulk_const, n_cols) == own_pure

@@ -36,6 +36,21 @@ def test_the_sampled_pattern_and_jacobian_equal_casadis(monkeypatch):
     np.testing.assert_allclose(ours.nonzeros(), theirs.nonzeros(), rtol=1e-14, atol=0)
 
 
+def test_a_dense_row_on_columns_of_one_period_is_found(monkeypatch):
+    """Columns repeat with a component's period (6 variables here); the dense row holds
+    the second of each six, which every 64th column never meets (64 = 4 mod 6)."""
+    n = 6000
+    x = ca.SX.sym("x", n)
+    rows = [x[i] - 2 * x[(i + 1) % n] for i in range(n)]
+    rows.append(ca.sum1(x[1::6]))
+    expr = ca.vertcat(*rows)
+    monkeypatch.setattr(st, "_SAMPLED_PATTERN_ROWS", 1)
+    pattern, jac = st._pattern(expr, x)
+    assert jac is not None
+    assert pattern == ca.jacobian_sparsity(expr, x)
+    assert jac.sparsity() == pattern
+
+
 def test_without_a_dense_row_the_pattern_is_casadis_and_no_jacobian_is_formed(
         monkeypatch):
     x = ca.SX.sym("x", 500)

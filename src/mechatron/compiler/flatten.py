@@ -638,6 +638,7 @@ class _Unknowns(dict):
 _SX_HEADER = bytes.fromhex("79df0d8648700000030000000000000000") + b"d"
 _SX_RECORD = b"d/" + bytes(7)
 _BULK: list = []        # [True/False] once checked
+_SYMBOLS_PER_TEXT = 32768   # names serialized at once by _symbols
 
 
 def _serialized_column(names: list[str]) -> str:
@@ -697,7 +698,11 @@ def _symbols(names: list[str], split: bool = True) -> tuple[ca.SX, list[ca.SX] |
     if not names:
         return ca.SX(0, 1), []
     if len(names) > 8 and _bulk_ok():
-        column = ca.SX.deserialize(_serialized_column(names))
+        # in pieces: the text of a piece (a few MB) is made and freed again in the same
+        # memory, where one text of a million names would be fresh pages every time
+        step = _SYMBOLS_PER_TEXT
+        column = ca.vertcat(*[ca.SX.deserialize(_serialized_column(names[k:k + step]))
+                              for k in range(0, len(names), step)])
         return column, ca.vertsplit(column) if split else None
     syms = [ca.SX.sym(n) for n in names]
     return ca.vertcat(*syms), syms

@@ -186,7 +186,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     stacked : (SX, SX), optional
         ``vertcat(*res)`` and ``vertcat(*var_syms)``, if the caller has them already.
     sparsity, jacobian : Sparsity, SX, optional
-        Their Jacobian's sparsity, and the Jacobian, if the caller has them.
+        Their Jacobian's sparsity, and the Jacobian, if the caller has them; `adj`
+        must then list that sparsity's pattern.
 
     Raises
     ------
@@ -230,7 +231,11 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     # the purely linear equations: every unknown in them has a numeric coefficient
     # (Kirchhoff's laws, v = p.v - n.v, v = V(t)); only their combinations cancel
     # exactly, the other terms of c.i == C*der(c.v) are taken as generic
-    pure = _purely_linear(adj, eliminable, const, n)
+    if sparsity is not None and jac.sparsity() == sparsity:
+        # adj is that pattern (as in lower): read the entries, not the lists
+        pure = _purely_linear_entries(rows, cols, fixed, eliminable, len(res))
+    else:
+        pure = _purely_linear(adj, eliminable, const, n)
     elim = exact_elimination(linear, eliminable, rows=pure)
     out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac)
     for e, row in elim.rows.items():
@@ -305,6 +310,15 @@ def _purely_linear(adj, eliminable, const: _Columns, n_col: int) -> list[int]:
     bad = np.asarray(eliminable, dtype=bool)[col]
     bad[bad] = ~np.isin(row[bad] * n_col + col[bad], const.keys(n_col))
     return np.flatnonzero(np.bincount(row[bad], minlength=len(adj)) == 0).tolist()
+
+
+def _purely_linear_entries(rows: np.ndarray, cols: np.ndarray, fixed: np.ndarray,
+                           eliminable, n_rows: int) -> list[int]:
+    """`_purely_linear` when the incidence is the Jacobian's entries ``(rows, cols)``:
+    the equations with no entry of an eliminable variable whose coefficient is not
+    ``fixed`` (one pass over the arrays, no list per equation read)."""
+    bad = np.asarray(eliminable, dtype=bool)[cols] & ~fixed
+    return np.flatnonzero(np.bincount(rows[bad], minlength=n_rows) == 0).tolist()
 
 
 def _numbers(jac: ca.SX) -> np.ndarray:

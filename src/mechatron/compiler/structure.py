@@ -49,23 +49,31 @@ class Lowered:
 
 
 _SAMPLED_PATTERN_ROWS = 250_000   # from this many equations on, see _pattern
+_PROBE_COLUMNS = 1024             # columns sampled to find the dense rows (_pattern)
 
 
 def _pattern(expr: ca.SX, syms: ca.SX) -> tuple[ca.Sparsity, ca.SX | None]:
-    """``jacobian_sparsity(expr, syms)``, with the rows that hold hundreds of variables
+    """``jacobian_sparsity(expr, syms)``, with the rows that hold many variables
     found first and swept apart from the others when there are many rows; and the
     Jacobian itself when it was formed on the way (else None).
 
     CasADi's sweep over a few hundred thousand rows slows down several-fold when one
     row (the flow balance of a reference node that every branch of a ladder meets)
-    holds most columns. Such rows are found on every 64th column (a row with 8 of
-    them there holds hundreds of variables); the pattern is the same either way. Each
-    part is then differentiated at once, and the pattern read off its Jacobian:
-    ``casadi.jacobian`` forms the same pattern inside, and on such a graph every
-    sweep costs (`mechatron.compiler.linear.reveal` takes the Jacobian)."""
+    holds most columns. Such rows are found on a sample of the columns: one in 64, at
+    most `_PROBE_COLUMNS` (a few sweeps at any size), picked at random with a fixed
+    seed, not evenly spaced: a model's columns repeat with the period of its
+    components, which a stride can miss entirely. A row with 8 of them there holds
+    hundreds of variables of a small model, thousands of a large one (rows of a few
+    thousand cost little). The pattern is the same either way. Each part is then
+    differentiated at once, and the pattern read off its Jacobian: ``casadi.jacobian``
+    forms the same pattern inside, and on such a graph every sweep costs
+    (`mechatron.compiler.linear.reveal` takes the Jacobian)."""
     if expr.numel() < _SAMPLED_PATTERN_ROWS:
         return ca.jacobian_sparsity(expr, syms), None
-    probe = ca.jacobian_sparsity(expr, syms[::64])
+    n_col = syms.numel()
+    picked = np.random.default_rng(0).choice(
+        n_col, min(_PROBE_COLUMNS, max(n_col // 64, 1)), replace=False)
+    probe = ca.jacobian_sparsity(expr, syms[np.sort(picked).tolist()])
     count = np.diff(np.asarray(probe.get_crs()[0], dtype=np.int64))
     dense = np.flatnonzero(count >= 8)
     if dense.size == 0:
