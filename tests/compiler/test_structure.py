@@ -88,3 +88,15 @@ def test_a_ladder_lowers_the_same_through_the_sampled_pattern(monkeypatch):
                                   np.asarray(plain.f_ode(*args)))
     np.testing.assert_array_equal(np.asarray(sampled.f_out(*args)),
                                   np.asarray(plain.f_out(*args)))
+
+
+def test_the_entries_of_a_sub_block_are_casadis():
+    rng = np.random.default_rng(6)
+    sp = ca.sparsify(ca.DM((rng.random((40, 50)) < 0.2).astype(float))).sparsity()
+    assert 0 < sp.nnz() < 40 * 50 / 2
+    rows, cols = (np.asarray(a, dtype=np.int64) for a in sp.get_triplet())
+    es = rng.permutation(40)[:25].tolist()
+    vs = rng.permutation(50)[:25].tolist()
+    r, c = st._sub_entries(rows, cols, sp.shape, es, vs)
+    theirs = sp.sub(es, vs, False)[0]
+    assert sorted(zip(r.tolist(), c.tolist())) == sorted(zip(*theirs.get_triplet()))

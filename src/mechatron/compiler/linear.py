@@ -91,6 +91,8 @@ class Reduction:
         coefficient stands for.
     jacobian : SX or None
         The Jacobian of the given equations in the variables (None without equations).
+    entries : (ndarray, ndarray) or None
+        Its entries' rows and columns, in CasADi's order (column by column).
     """
 
     adj: list[list[int]]
@@ -99,6 +101,7 @@ class Reduction:
     const: list[set[int]] = field(default_factory=list)
     atoms: list = field(default_factory=list)
     jacobian: ca.SX | None = None
+    entries: tuple[np.ndarray, np.ndarray] | None = None
 
     def expression(self, a) -> ca.SX:
         """Coefficient `a` (a number or a `Laurent` polynomial) as an expression."""
@@ -237,7 +240,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     else:
         pure = _purely_linear(adj, eliminable, const, n)
     elim = exact_elimination(linear, eliminable, rows=pure)
-    out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac)
+    out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac, entries=(rows, cols))
     for e, row in elim.rows.items():
         comb = elim.combination(e) if elim.changed(e) else {e: 1}
         inc = dict.fromkeys(sorted(row))

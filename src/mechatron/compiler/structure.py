@@ -345,7 +345,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     if res and reduction.jacobian is not None and (not singles or (
             max(es) < n_orig and max(vs) < var_vec.numel()
             and not (reduced and any(e in reduced for e in es)))):
-        given = (res_vec, var_vec, reduction.jacobian, pattern)
+        given = (res_vec, var_vec, reduction.jacobian, pattern, reduction.entries)
     bulk_x, bulk_expr, bulk_at = _solve_singles(res, var_syms, singles, given)
     out.largest_block = max((len(b.equations) for b in blocks), default=0)
     # the assignments in block order: the bulk solutions stay stacked (an index into
@@ -572,19 +572,20 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     expressions stacked (by colour), and ``{e: row of x}``; the others (not linear in
     their variable) are left to the equation-by-equation path.
 
-    ``given = (R, V, J, S)``: the residuals and variables stacked, the Jacobian of R in
-    V and its sparsity; each block's equation is then a row of R, its variable a row of
-    V, and ``J`` and ``S`` are read instead of computed again."""
+    ``given = (R, V, J, S, entries)``: the residuals and variables stacked, the
+    Jacobian of R in V, its sparsity and the rows and columns of its entries (column by
+    column; None to read them off ``J``); each block's equation is then a row of R, its
+    variable a row of V, and all of these are read instead of computed again."""
     n = len(singles)
     if n < 2:
         return ca.SX(0, 1), ca.SX(0, 1), {}
     es, vs = (list(a) for a in zip(*singles))
     if given is not None:
-        R, V, J, S = given
+        R, V, J, S, entries = given
         E, X = R[es], V[vs]
-        pattern = S.sub(es, vs, False)[0]
         # J's nonzeros in column-major order: their keys col * rows + row are sorted
-        r_nz, c_nz = (np.asarray(a, dtype=np.int64) for a in J.sparsity().get_triplet())
+        r_nz, c_nz = entries if entries is not None else (
+            np.asarray(a, dtype=np.int64) for a in J.sparsity().get_triplet())
         keys = c_nz * J.size1() + r_nz
         want = np.asarray(vs, dtype=np.int64) * J.size1() + np.asarray(es, dtype=np.int64)
         at = np.minimum(np.searchsorted(keys, want), max(keys.size - 1, 0))
@@ -592,14 +593,19 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         d = ca.SX.zeros(n)
         if hit.size:
             d[hit.tolist()] = J.nz[at[hit].tolist()]
+        if S == J.sparsity():
+            r, c = _sub_entries(r_nz, c_nz, J.shape, es, vs)
+        else:
+            r, c = (np.asarray(a, dtype=np.int64)
+                    for a in S.sub(es, vs, False)[0].get_triplet())
     else:
         E = ca.vertcat(*[res[e] for e in es])
         X = ca.vertcat(*[var_syms[v] for v in vs])
         d = ca.diag(sparse_jacobian(E, X))
-        pattern = ca.jacobian_sparsity(E, X)
+        r, c = (np.asarray(a, dtype=np.int64)
+                for a in ca.jacobian_sparsity(E, X).get_triplet())
     # blocks i and j clash when the equation of one holds the variable of the other; in
     # the greedy colouring (in block order) only the earlier of the two looks at it
-    r, c = (np.asarray(a, dtype=np.int64) for a in pattern.get_triplet())
     a, b = np.concatenate([r, c]), np.concatenate([c, r])
     keep = b < a
     a, b = a[keep], b[keep]
@@ -640,6 +646,20 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     if not solved:
         return ca.SX(0, 1), ca.SX(0, 1), {}
     return ca.vertcat(*xs_all), ca.vertcat(*sols), at
+
+
+def _sub_entries(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int],
+                 es: list[int], vs: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The entries ``(rows, cols)`` of a matrix of ``shape`` that lie in rows ``es`` and
+    columns ``vs``, numbered by their place there: ``Sparsity.sub(es, vs)``'s entries
+    (in the given order, not CasADi's), by array lookups."""
+    place_e = np.full(shape[0], -1, dtype=np.int64)
+    place_e[es] = np.arange(len(es))
+    place_v = np.full(shape[1], -1, dtype=np.int64)
+    place_v[vs] = np.arange(len(vs))
+    r, c = place_e[rows], place_v[cols]
+    inside = (r >= 0) & (c >= 0)
+    return r[inside], c[inside]
 
 
 def _explicit(r: ca.SX, x: ca.SX):
