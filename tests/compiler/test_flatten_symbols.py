@@ -118,6 +118,13 @@ def test_every_symbol_is_named_by_its_path_and_stacked_in_declaration_order(buil
     some = list(flat.variables)[::3]
     picked = flat.stack_variables(some)
     assert all(ca.is_equal(picked[k], flat.variables[n].sym) for k, n in enumerate(some))
+    # each name's row, read off the records or counted: its place in declaration order
+    rows = flat.variable_rows()
+    assert all(rows[n] == k and rows.get(n) == k and n in rows
+               for k, n in enumerate(flat.variables))
+    assert rows.get("no.such.v") is None and "no.such.v" not in rows
+    by_row = flat.stack_rows([rows[n] for n in some])
+    assert all(ca.is_equal(by_row[k], flat.variables[n].sym) for k, n in enumerate(some))
 
 
 def test_values_starts_and_bound_parameters_are_read_as_given():

@@ -9,6 +9,7 @@ connections imply (handed to alias elimination rather than written as equations)
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -98,6 +99,30 @@ class _ColumnVariable(FlatVariable):
     @sym.setter
     def sym(self, value):
         _SYM_SLOT.__set__(self, value)
+
+
+class _RowsOf:
+    """Variable name -> its row in the column of all variables, read off the records
+    (`_ColumnVariable.row`) when every variable was bound in bulk: no second dictionary
+    of every name. Few names are looked up (most passes go by number)."""
+
+    __slots__ = ("variables",)
+
+    def __init__(self, variables: dict):
+        self.variables = variables
+
+    def get(self, name, default=None):
+        record = self.variables.get(name)
+        return default if record is None else record.row
+
+    def __getitem__(self, name) -> int:
+        return self.variables[name].row
+
+    def __contains__(self, name) -> bool:
+        return name in self.variables
+
+    def __len__(self) -> int:
+        return len(self.variables)
 
 
 class FoldedPort:
@@ -263,9 +288,13 @@ class FlatModel:
         rows = [index[n] for n in names]
         return column[rows] if rows else ca.SX(0, 1)
 
-    def variable_rows(self) -> dict[str, int]:
+    def stack_rows(self, rows: list[int]) -> ca.SX:
+        """The symbols of the variables in ``rows`` of `stack_variables`' column."""
+        return self._stacked()[0][rows] if rows else ca.SX(0, 1)
+
+    def variable_rows(self) -> Mapping[str, int]:
         """Each variable's row in `stack_variables`' column (its place in declaration
-        order)."""
+        order): ``rows[name]``, ``rows.get(name)``, ``name in rows``."""
         return self._stacked()[1]
 
     def _stacked(self) -> tuple[ca.SX, dict[str, int]]:
@@ -581,7 +610,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         ctx.unknowns = _Unknowns(variables, ctx.unknowns)
     if not base and len(variables) == len(var_names):   # the column holds them all
         flat.__dict__["_variable_stack"] = (len(var_names), var_column,
-                                            dict(zip(var_names, range(len(var_names)))))
+                                            _RowsOf(variables))
 
 
 def _bind_variables(flat, el, syms, prefix, owner_path, plain, problems) -> None:
