@@ -6,6 +6,7 @@ import random
 import pytest
 
 from mechatron.compiler.graph import maximum_matching, pantelides
+from mechatron.compiler.graph.pantelides import _copy_adjacency
 from mechatron.errors import StructuralError
 
 
@@ -206,3 +207,15 @@ def test_singular_system_is_refused_with_a_matching_onto_highest_derivatives():
     and der(x) are one family, matched by two equations."""
     with pytest.raises(StructuralError, match=r"equations \[0, 1\] involve only 1 "):
         pantelides(2, [[0, 1], [1, 0]], [1, -1])
+
+
+def test_rows_that_need_no_change_are_shared_and_the_others_are_new(pendulum):
+    adj = [list(row) for row in pendulum.adj] + [[0, 0, 1], [1.0, 2]]
+    ir = pantelides(pendulum.n_var, adj[:-2], pendulum.var_to_diff)
+    increasing = [e for e in range(len(pendulum.adj))
+                  if all(a < b for a, b in zip(adj[e], adj[e][1:]))]
+    assert increasing and all(ir.adj[e] is adj[e] for e in increasing)
+    assert all(ir.adj[e] == list(dict.fromkeys(adj[e])) for e in range(len(pendulum.adj)))
+    rows = _copy_adjacency(pendulum.n_var, adj)
+    assert rows[-2] == [0, 1] and rows[-2] is not adj[-2]      # a repeat left out
+    assert rows[-1] == [1, 2] and all(type(v) is int for row in rows for v in row)

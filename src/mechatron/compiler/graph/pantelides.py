@@ -23,6 +23,7 @@ differential-algebraic systems", SIAM J. Sci. Stat. Comput. 9(2), 1988; J. D. Pr
 from __future__ import annotations
 
 from collections.abc import Sequence
+from itertools import chain
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -297,14 +298,21 @@ def _inverse(links: Sequence[int]) -> list[int]:
 
 
 def _copy_adjacency(n_var: int, adj: Sequence[Sequence[int]]) -> list[list[int]]:
-    """Validated copy of `adj`, each row without repeated variables."""
+    """Validated rows of `adj` in a new list, each row without repeated variables. A
+    row given as a list of ints that needs no change is that list itself, not a copy:
+    index reduction appends rows and never changes one (a million rows of a large
+    network are not copied again)."""
     flat = checked_entries(n_var, adj)
     if flat is None:
         return [list(dict.fromkeys(int(v) for v in row)) for row in adj]
     lens = np.fromiter(map(len, adj), dtype=np.int64, count=len(adj))
     ptr = np.concatenate([np.zeros(1, dtype=np.int64), np.cumsum(lens)])
-    values = flat.tolist()
-    rows = [values[a:b] for a, b in zip(ptr[:-1].tolist(), ptr[1:].tolist())]
+    if all(type(row) is list for row in adj) and \
+            set(map(type, chain.from_iterable(adj))) <= {int}:
+        rows = list(adj)
+    else:
+        values = flat.tolist()
+        rows = [values[a:b] for a, b in zip(ptr[:-1].tolist(), ptr[1:].tolist())]
     # a row whose entries increase repeats none; the others are deduplicated
     falls = np.diff(flat) <= 0
     starts = ptr[1:-1]
