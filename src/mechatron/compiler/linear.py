@@ -240,7 +240,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     else:
         pure = _purely_linear(adj, eliminable, const, n)
     elim = exact_elimination(linear, eliminable, rows=pure)
-    out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac, entries=(rows, cols))
+    out = Reduction(list(adj), const=const, atoms=atoms, jacobian=jac,
+                    entries=(rows, cols))
     for e, row in elim.rows.items():
         comb = elim.combination(e) if elim.changed(e) else {e: 1}
         inc = dict.fromkeys(sorted(row))

@@ -215,7 +215,8 @@ def test_rows_that_need_no_change_are_shared_and_the_others_are_new(pendulum):
     increasing = [e for e in range(len(pendulum.adj))
                   if all(a < b for a, b in zip(adj[e], adj[e][1:]))]
     assert increasing and all(ir.adj[e] is adj[e] for e in increasing)
-    assert all(ir.adj[e] == list(dict.fromkeys(adj[e])) for e in range(len(pendulum.adj)))
+    assert all(ir.adj[e] == list(dict.fromkeys(adj[e]))
+               for e in range(len(pendulum.adj)))
     rows = _copy_adjacency(pendulum.n_var, adj)
     assert rows[-2] == [0, 1] and rows[-2] is not adj[-2]      # a repeat left out
     assert rows[-1] == [1, 2] and all(type(v) is int for row in rows for v in row)
