@@ -5,6 +5,7 @@ quantities written here entry by entry, on scrambled random entries."""
 
 from fractions import Fraction
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -77,3 +78,25 @@ def test_bulk_arrays_equal_the_entry_by_entry_reading(seed):
                 if all(not eliminable[v] or v in const[e] for v in own[e])]
     assert lin._purely_linear_entries(rows, cols, fixed, eliminable, n_rows) == own_pure
     assert lin._purely_linear(own, eliminable, bulk_const, n_cols) == own_pure
+
+
+def test_numbers_read_by_one_function_of_the_symbols_equal_the_entry_by_entry_reading(
+        monkeypatch):
+    x, p, t, q = (ca.SX.sym(n, k) for n, k in (("x", 3), ("p", 2), ("t", 1), ("q", 1)))
+    rows = ca.vertcat(2 * x[0] - x[1], p[0] * x[1] + 0.5 * x[2], x[0] * x[2] - ca.sin(t),
+                      ca.if_else(x[0] > 0, 3 * x[1], x[1] / 4), -x[2] / 3 + 1e300 * x[0],
+                      x[1] - q * x[2], ca.sqrt(p[1]) * x[0])
+    jac = ca.jacobian(rows, x)
+    expected = lin._numbers(jac)              # by the symbols each entry holds
+    nz = jac.nz[:]
+    for k in range(nz.numel()):
+        if nz[k].is_constant():
+            assert expected[k] == float(ca.evalf(nz[k]))
+        else:
+            assert np.isnan(expected[k])
+    known = ca.vertcat(x, p, t)
+    # q is not among them: the function of them has a free symbol, the other path runs
+    np.testing.assert_array_equal(lin._numbers(jac, known), expected)
+    # with every symbol given, the symbols of the entries are not looked up at all
+    monkeypatch.setattr(ca, "symvar", None)
+    np.testing.assert_array_equal(lin._numbers(jac, ca.vertcat(known, q)), expected)

@@ -163,7 +163,8 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
            parameters: list[ca.SX] | None = None,
            stacked: tuple[ca.SX, ca.SX] | None = None,
            sparsity: ca.Sparsity | None = None,
-           jacobian: ca.SX | None = None) -> Reduction:
+           jacobian: ca.SX | None = None,
+           symbols: ca.SX | None = None) -> Reduction:
     """Reduce the linear part of the equations exactly; raise on a dependency.
 
     An unknown's coefficient takes part when it is a number or an expression of
@@ -191,6 +192,10 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
     sparsity, jacobian : Sparsity, SX, optional
         Their Jacobian's sparsity, and the Jacobian, if the caller has them; `adj`
         must then list that sparsity's pattern.
+    symbols : SX, optional
+        A column of the symbols the equations hold (the variables, the parameters,
+        time): the Jacobian's entries are then told numbers or not by one function of
+        them (else, or if an entry holds another symbol, by the symbols they hold).
 
     Raises
     ------
@@ -205,7 +210,7 @@ def reveal(name: str, res: list[ca.SX], orig: list, var_syms: list[ca.SX],
         *(stacked if stacked is not None else (ca.vertcat(*res), ca.vertcat(*var_syms))),
         sparsity)
     rows, cols = (np.asarray(a, dtype=np.int64) for a in jac.sparsity().get_triplet())
-    values = _numbers(jac)
+    values = _numbers(jac, symbols)
     fixed = ~np.isnan(values)        # a coefficient free of unknowns: a number, ...
     take = np.flatnonzero(fixed & (values != 0))
     coefs = _exact_numbers(values[take])
@@ -325,10 +330,21 @@ def _purely_linear_entries(rows: np.ndarray, cols: np.ndarray, fixed: np.ndarray
     return np.flatnonzero(np.bincount(rows[bad], minlength=n_rows) == 0).tolist()
 
 
-def _numbers(jac: ca.SX) -> np.ndarray:
+def _numbers(jac: ca.SX, symbols: ca.SX | None = None) -> np.ndarray:
     """The nonzeros of `jac` that are numbers, NaN for the others (expressions of
-    symbols): read in bulk, with one dependency pattern and one evaluation."""
+    symbols): read in bulk, with one dependency pattern and one evaluation. With
+    ``symbols`` (a column of every symbol the entries may hold), both come from one
+    function of them, evaluated at zero where nothing depends on them."""
     nz = jac.nz[:]
+    if symbols is not None:
+        f = ca.Function("coefficients", [symbols], [nz], {"allow_free": True})
+        if not f.has_free():
+            depends = np.zeros(nz.numel(), dtype=bool)
+            depends[f.sparsity_jac(0, 0).get_triplet()[0]] = True
+            with np.errstate(all="ignore"):
+                values = np.asarray(f(np.zeros(symbols.numel())), dtype=float).ravel()
+            values[depends] = np.nan
+            return values
     out = np.full(nz.numel(), np.nan)
     free = ca.symvar(nz)
     depends = np.zeros(nz.numel(), dtype=bool)

@@ -213,7 +213,8 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                 declared=dict(zip(alias.unknowns, order)),
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
                 classes=dict(flat.components), physical=flat.physical_owners,
-                parameters=p_syms, stacked=stacked)
+                parameters=p_syms, stacked=stacked,
+                others=ca.vertcat(p, ctx.time))
     lap("structure")
 
     # every logged variable as an expression of the unknowns

@@ -108,7 +108,8 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
           classes: dict[str, str] | None = None,
           physical: set[str] | None = None,
           parameters: list[ca.SX] | None = None,
-          stacked: tuple[ca.SX, ca.SX] | None = None) -> Lowered:
+          stacked: tuple[ca.SX, ca.SX] | None = None,
+          others: ca.SX | None = None) -> Lowered:
     """Index-reduce, sort, tear and solve the equations for the unknowns.
 
     Parameters
@@ -147,6 +148,10 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     stacked : (SX, SX), optional
         ``vertcat(*residuals)`` and the unknowns' symbols followed by the derivative
         symbols (in the order of ``unknowns``), stacked, if the caller has them already.
+    others : SX, optional
+        With ``stacked``: a column of the other symbols the residuals may hold (the
+        parameters, time), so that the numbers among the Jacobian's entries are read by
+        one function of the symbols (see `mechatron.compiler.linear.reveal`).
 
     Notes
     -----
@@ -168,12 +173,12 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     args = (name, residuals, origins, unknowns, syms, derivative, time, start_guess,
             hints, preference, declared, roles, classes, physical)
     try:
-        return _lower(*args, None, stacked)
+        return _lower(*args, None, stacked, others)
     except _Singular:
         if not parameters:
             raise
     try:
-        return _lower(*args, parameters, stacked)
+        return _lower(*args, parameters, stacked, others)
     except _Singular as exc:
         raise StructuralError(str(exc), equations=exc.equations, variables=exc.variables,
                               path=exc.path) from None
@@ -181,7 +186,7 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
 
 def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_guess, hints,
            preference, declared, roles, classes, physical, parameters,
-           stacked=None) -> Lowered:
+           stacked=None, others=None) -> Lowered:
     # -- variables of the structural problem: unknowns and their derivatives -------------
     var_syms: list[ca.SX] = list(syms) if isinstance(syms, list) else \
         [syms[n] for n in unknowns]
@@ -214,7 +219,9 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # and inductors, a loop of voltage sources and capacitors) are exposed first
     reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
                        classes, parameters, stacked=(res_vec, var_vec) if res else None,
-                       sparsity=pattern, jacobian=jac)
+                       sparsity=pattern, jacobian=jac,
+                       symbols=ca.vertcat(var_vec, others)
+                       if res and others is not None and stacked is not None else None)
     try:
         ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
     except StructuralError as exc:
