@@ -63,6 +63,22 @@ def ratio(num: float | None, den: float | None) -> float | None:
     return num / den
 
 
+def peak_rss_mb() -> float:
+    """This process's peak resident memory in MB: ``VmHWM`` where Linux gives it (a
+    process started by a large one does not inherit its parent's peak, as
+    ``ru_maxrss`` does across the fork), else ``ru_maxrss``."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    import resource
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / 1024 if sys.platform != "darwin" else peak / 2**20
+
+
 def growth_exponent(n1: float, t1: float | None, n2: float, t2: float | None) -> float | None:
     """Exponent ``a`` of ``t ~ N**a`` fitted between two points."""
     if not t1 or not t2 or t1 <= 0 or t2 <= 0:

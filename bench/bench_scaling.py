@@ -42,8 +42,8 @@ import sys
 import time
 
 import _common  # noqa: F401  (import path)
-from _common import (clock, growth_exponent, log, logging_alternative, main, profiled,
-                     ratio, repeat, summary)
+from _common import (clock, growth_exponent, log, logging_alternative, main, peak_rss_mb,
+                     profiled, ratio, repeat, summary)
 
 import numpy as np
 import scipy.sparse as sp
@@ -209,7 +209,6 @@ def compile_once(n: int) -> dict:
     after = resource.getrusage(resource.RUSAGE_SELF)
     rep = cm.report
     flat = (rep.get("equations") or {}).get("flat") or 0
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return {"N": n, "build_s": t_build, "compile_s": t_compile, "compile_cpu_s": cpu,
             "passes_s": dict(rep.get("timings", {})),
             "passes_cpu_s": dict(rep.get("cpu_timings", {})), "equations_flat": flat,
@@ -220,7 +219,7 @@ def compile_once(n: int) -> dict:
             "user_s": after.ru_utime - usage.ru_utime,
             "system_s": after.ru_stime - usage.ru_stime,
             "minor_page_faults": after.ru_minflt - usage.ru_minflt,
-            "peak_rss_MB": peak / 1024 if sys.platform != "darwin" else peak / 2**20}
+            "peak_rss_MB": peak_rss_mb()}
 
 
 def compile_scaling(sizes: list[int], fresh: bool = True) -> dict:

@@ -195,11 +195,15 @@ def _rows_scaling(r: dict) -> list[dict]:
         rows.append(_row(f"RC ladder N={n} compile", "s", row["compile_s"],
                          goal=f"< {goal} s (issue 17)" if goal else None,
                          met=row["compile_s"] < goal if goal else None))
-        mech = row.get("simulate_second_s", row["simulate_first_s"])
+        # a size simulated once gives a first call (the integrator built): issue 17's
+        # goal is on warm runs (the ladder_simulate rows), not on that
+        warm = "simulate_second_s" in row
+        mech = row["simulate_second_s"] if warm else row["simulate_first_s"]
         base = row["scipy_bdf_sparse"]
         ratio = base["ratio_scipy_over_mechatron_simulate"]
-        wants = n in LADDER_SIMULATE_GOAL_N
-        rows.append(_row(f"RC ladder N={n} simulate", "s", mech,
+        wants = warm and n in LADDER_SIMULATE_GOAL_N
+        rows.append(_row(f"RC ladder N={n} simulate" + ("" if warm else ", first call"),
+                         "s", mech,
                          "SciPy BDF, sparse Jacobian", base["time"]["median_s"], ratio,
                          f"ratio >= {LADDER_SIMULATE_GOAL_RATIO:g} (issue 17)" if wants
                          else None,
