@@ -174,13 +174,13 @@ def _rows_dc_motor(r: dict) -> list[dict]:
         rows.append(_row(f"DC motor 0.5 s, simulate (default: {d['solver']})", "s",
                          d["simulate"]["median_s"], "SciPy LSODA", lsoda["time"]["median_s"],
                          ratio_d, "ratio >= 10 (issue 17)", (ratio_d or 0) >= 10))
+    # issue 17's goal is on the default run (above); each solver chosen by name is shown
+    # for comparison
     rows += [_row("DC motor 0.5 s, simulate (cvodes)", "s", mech, "SciPy LSODA",
-                 lsoda["time"]["median_s"], lsoda["ratio_scipy_over_mechatron"],
-                 "ratio >= 10 (issue 17)", lsoda["ratio_scipy_over_mechatron"] >= 10),
+                 lsoda["time"]["median_s"], lsoda["ratio_scipy_over_mechatron"]),
             _row("DC motor 0.5 s, simulate (rodas4)", "s", rodas["simulate"]["median_s"],
                  "SciPy LSODA", lsoda["time"]["median_s"],
-                 lsoda["ratio_scipy_over_mechatron_rodas4"], "ratio >= 10 (issue 17)",
-                 lsoda["ratio_scipy_over_mechatron_rodas4"] >= 10),
+                 lsoda["ratio_scipy_over_mechatron_rodas4"]),
             _row("DC motor, first rodas4 run (C build)", "s", rodas["build_s"],
                  goal="< 2 s (issue 17)", met=rodas["build_s"] < 2.0),
             _row("DC motor compile", "s", r["compile_acausal"]["time"]["median_s"])]
