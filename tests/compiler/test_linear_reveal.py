@@ -95,8 +95,11 @@ def test_numbers_read_by_one_function_of_the_symbols_equal_the_entry_by_entry_re
         else:
             assert np.isnan(expected[k])
     known = ca.vertcat(x, p, t)
-    # q is not among them: the function of them has a free symbol, the other path runs
+    # q is not among them: the function of them has a free symbol, the other path runs;
+    # so it does for a column that is not of distinct symbols
     np.testing.assert_array_equal(lin._numbers(jac, known), expected)
+    np.testing.assert_array_equal(lin._numbers(jac, ca.vertcat(known, x[0])), expected)
+    np.testing.assert_array_equal(lin._numbers(jac, ca.vertcat(known, 2 * q)), expected)
     # with every symbol given, the symbols of the entries are not looked up at all
     monkeypatch.setattr(ca, "symvar", None)
     np.testing.assert_array_equal(lin._numbers(jac, ca.vertcat(known, q)), expected)

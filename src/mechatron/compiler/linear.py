@@ -337,8 +337,11 @@ def _numbers(jac: ca.SX, symbols: ca.SX | None = None) -> np.ndarray:
     function of them, evaluated at zero where nothing depends on them."""
     nz = jac.nz[:]
     if symbols is not None:
-        f = ca.Function("coefficients", [symbols], [nz], {"allow_free": True})
-        if not f.has_free():
+        try:
+            f = ca.Function("coefficients", [symbols], [nz], {"allow_free": True})
+        except RuntimeError:        # not a column of distinct symbols: the other path
+            f = None
+        if f is not None and not f.has_free():
             depends = np.zeros(nz.numel(), dtype=bool)
             depends[f.sparsity_jac(0, 0).get_triplet()[0]] = True
             with np.errstate(all="ignore"):
