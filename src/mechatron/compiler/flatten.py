@@ -297,7 +297,7 @@ class FlatModel:
         order): ``rows[name]``, ``rows.get(name)``, ``name in rows``."""
         return self._stacked()[1]
 
-    def _stacked(self) -> tuple[ca.SX, dict[str, int]]:
+    def _stacked(self) -> tuple[ca.SX, Mapping[str, int]]:
         cache = self.__dict__.get("_variable_stack")
         if cache is None or cache[0] != len(self.variables):
             index = {n: k for k, n in enumerate(self.variables)}
