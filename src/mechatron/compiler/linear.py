@@ -58,7 +58,13 @@ def sparse_jacobian(expr: ca.SX, syms: ca.SX, sparsity: ca.Sparsity | None = Non
     dense = np.flatnonzero(count > _DENSE_ROW)
     if dense.size == 0 or dense.size == count.size:
         return ca.jacobian(expr, syms)
-    sparse = np.flatnonzero(count <= _DENSE_ROW)
+    return jacobian_apart(expr, syms, dense)
+
+
+def jacobian_apart(expr: ca.SX, syms: ca.SX, dense: np.ndarray) -> ca.SX:
+    """``casadi.jacobian(expr, syms)``, the rows ``dense`` (a sorted array of row
+    numbers) differentiated apart from the others, each part at once."""
+    sparse = np.setdiff1d(np.arange(expr.numel()), dense)
     both = ca.vertcat(ca.jacobian(expr[sparse.tolist()], syms),
                       ca.jacobian(expr[dense.tolist()], syms))
     return both[np.argsort(np.concatenate([sparse, dense])).tolist(), :]

@@ -19,7 +19,8 @@ import numpy as np
 
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
-from mechatron.compiler.linear import Combined, owner_of, reveal, sparse_jacobian
+from mechatron.compiler.linear import (Combined, jacobian_apart, owner_of, reveal,
+                                       sparse_jacobian)
 from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
 
@@ -78,10 +79,7 @@ def _pattern(expr: ca.SX, syms: ca.SX) -> tuple[ca.Sparsity, ca.SX | None]:
     dense = np.flatnonzero(count >= 8)
     if dense.size == 0:
         return ca.jacobian_sparsity(expr, syms), None
-    sparse = np.flatnonzero(count < 8)
-    both = ca.vertcat(ca.jacobian(expr[sparse.tolist()], syms),
-                      ca.jacobian(expr[dense.tolist()], syms))
-    jac = both[np.argsort(np.concatenate([sparse, dense])).tolist(), :]
+    jac = jacobian_apart(expr, syms, dense)
     return jac.sparsity(), jac
 
 
