@@ -103,12 +103,10 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     parent = list(range(n))        # a root is its own parent
     factor = [1.0] * n             # x[k] = factor[k] * x[parent[k]]
     const: dict[int, float] = {}   # root -> constant value (root = const)
-    # the number of each variable: its row in the model's stacked variables (one
-    # dictionary shared with flattening, not a copy); a name that is not a variable is
-    # numbered on first use
-    rows = flat.variable_rows()
-    number = rows.get
-    index = _Numbers(rows, parent, factor)
+    # the number of each variable: its row in the model's stacked variables (the
+    # mapping flattening keeps, not a copy); a name that is not a variable is numbered
+    # on first use
+    index = _Numbers(flat.variable_rows(), parent, factor)
 
     def find(a: int) -> tuple[int, float]:
         """Root of ``a`` and the factor with a = factor * root (path compressed)."""
@@ -152,12 +150,8 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
 
     redundant: list[FlatEquation] = []
     for a, b, s, origin in flat.aliases:     # by number, or by name
-        ia = a if type(a) is int else number(a)
-        ib = b if type(b) is int else number(b)
-        if ia is None:              # a name that is not a variable: numbered on first use
-            ia = index[a]
-        if ib is None:
-            ib = index[b]
+        ia = a if type(a) is int else index[a]
+        ib = b if type(b) is int else index[b]
         if not union(ia, ib, s):
             redundant.append(FlatEquation(unknowns[names[ia]].sym -
                                           s * unknowns[names[ib]].sym, origin))

@@ -1773,8 +1773,8 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
             cols.append(index.setdefault(name, len(index)))
             vals.append(sign)
     A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
-    column, number = flat._stacked()
-    x = column[[name if type(name) is int else number[name] for name in index]]
+    number = flat.variable_rows()
+    x = flat.stack_rows([name if type(name) is int else number[name] for name in index])
     for (_, origin), residual in zip(flow_sums, ca.vertsplit(ca.mtimes(A, x))):
         flat.equations.append(FlatEquation(residual, origin))
 
