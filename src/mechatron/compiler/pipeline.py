@@ -176,9 +176,9 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # lowering's variables are the unknowns, then their derivatives
     # (the scalars stacked apart: CasADi's vertcat of a column and 10^5 scalars costs
     # half as much again as the two steps)
-    order = alias.unknown_index.tolist() if alias.unknown_index is not None else None
-    unknown_col = flat.stack_variables(alias.unknowns) if order is None else \
-        flat.stack_rows(order)
+    # each unknown's row among the model's variables (none without variables)
+    order = alias.unknown_index.tolist() if alias.unknown_index is not None else []
+    unknown_col = flat.stack_rows(order)
     stacked = (res_vec, ca.vertcat(unknown_col, ca.vertcat(*der_syms))) \
         if residuals and not relations else None
     residuals = scanned
@@ -205,8 +205,6 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
 
     # the hints are read only by messages; the declaration order of the unknowns only
     hints = _OnDemand(lambda: {n: v.hint for n, v in variables.items() if v.hint})
-    if order is None:
-        order = [i for i, n in enumerate(variables) if n not in alias.eliminated]
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),

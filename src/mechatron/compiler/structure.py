@@ -579,8 +579,9 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
 
     ``given = (R, V, J, S, entries)``: the residuals and variables stacked, the
     Jacobian of R in V, its sparsity and the rows and columns of its entries (column by
-    column; None to read them off ``J``); each block's equation is then a row of R, its
-    variable a row of V, and all of these are read instead of computed again."""
+    column, `mechatron.compiler.linear.Reduction.entries`); each block's equation is
+    then a row of R, its variable a row of V, and all of these are read instead of
+    computed again."""
     n = len(singles)
     if n < 2:
         return ca.SX(0, 1), ca.SX(0, 1), {}
@@ -589,8 +590,7 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         R, V, J, S, entries = given
         E, X = R[es], V[vs]
         # J's nonzeros in column-major order: their keys col * rows + row are sorted
-        r_nz, c_nz = entries if entries is not None else (
-            np.asarray(a, dtype=np.int64) for a in J.sparsity().get_triplet())
+        r_nz, c_nz = entries
         keys = c_nz * J.size1() + r_nz
         want = np.asarray(vs, dtype=np.int64) * J.size1() + np.asarray(es, dtype=np.int64)
         at = np.minimum(np.searchsorted(keys, want), max(keys.size - 1, 0))
