@@ -64,7 +64,9 @@ def sparse_jacobian(expr: ca.SX, syms: ca.SX, sparsity: ca.Sparsity | None = Non
 def jacobian_apart(expr: ca.SX, syms: ca.SX, dense: np.ndarray) -> ca.SX:
     """``casadi.jacobian(expr, syms)``, the rows ``dense`` (a sorted array of row
     numbers) differentiated apart from the others, each part at once."""
-    sparse = np.setdiff1d(np.arange(expr.numel()), dense)
+    apart = np.zeros(expr.numel(), dtype=bool)
+    apart[dense] = True
+    sparse = np.flatnonzero(~apart)
     both = ca.vertcat(ca.jacobian(expr[sparse.tolist()], syms),
                       ca.jacobian(expr[dense.tolist()], syms))
     return both[np.argsort(np.concatenate([sparse, dense])).tolist(), :]
