@@ -29,7 +29,17 @@ passes (``report["cpu_timings"]``; ``report["timings"]`` in wall clock), the pea
 resident memory of the process (building the instance included) and the CPU
 microseconds per flat equation.
 
-``--quick`` skips N = 10000. Run: ``python bench/bench_scaling.py [--quick] [--large]``.
+Growth of the compile time per equation (``--growth [ROUNDS]``, issue 17: below 1.3x from
+N = 1000 to N = 100000): rounds of one N = 100000 compile and ten N = 1000 compiles, each
+in a fresh process, in turn. On a shared machine the CPU time of the same work moves
+between two levels about 1.6-1.8x apart, in spells of a few seconds (a plain Python loop
+shows them too: ``machine_spells``). A run of 0.3 s falls in one spell, a run of 45 s
+spans many, so the fastest and the median short run are compared with long runs that
+could not avoid the slow spells. The growth is the ratio of the *means*: each size then
+meets the slow spells in the same proportion. Medians and minima are printed beside it.
+
+``--quick`` skips N = 10000. Run: ``python bench/bench_scaling.py [--quick] [--large]``,
+``python bench/bench_scaling.py --growth [ROUNDS]``.
 """
 
 from __future__ import annotations
@@ -37,6 +47,7 @@ from __future__ import annotations
 import gc
 import json
 import resource
+import statistics
 import subprocess
 import sys
 import time
@@ -247,6 +258,63 @@ def compile_scaling(sizes: list[int], fresh: bool = True) -> dict:
             "growth_exponents": _exponents(rows, lambda r: r["compile_cpu_s"])}
 
 
+def machine_spells(seconds: float = 10.0) -> dict:
+    """How steady this machine's CPU is: a fixed Python loop timed over and over for
+    ``seconds``; the share of the loops that took over 1.3x the fastest, and the slowest
+    over the fastest (1.0 on a machine of its own)."""
+    n = 100_000
+    start, times = time.perf_counter(), []
+    while time.perf_counter() - start < seconds:
+        t = time.process_time()
+        s = 0
+        for i in range(n):
+            s += i
+        times.append(time.process_time() - t)
+    fastest = min(times)
+    return {"loops": len(times), "fastest_ms": 1e3 * fastest,
+            "slow_share": sum(t > 1.3 * fastest for t in times) / len(times),
+            "slowest_over_fastest": max(times) / fastest,
+            "median_over_fastest": statistics.median(times) / fastest}
+
+
+def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
+                   per_round: int = 10) -> dict:
+    """The growth of the compile CPU time per flat equation from ``small`` to ``large``:
+    ``rounds`` rounds of one ``large`` and ``per_round`` ``small`` compiles, each in a
+    fresh process (see the module's docstring for why the means are compared)."""
+    spells = [machine_spells()]
+    runs: dict[int, list[dict]] = {small: [], large: []}
+    for k in range(rounds):
+        for n in [large] + [small] * per_round:
+            done = subprocess.run([sys.executable, __file__, "--compile-one", str(n)],
+                                  capture_output=True, text=True, check=True)
+            runs[n].append(json.loads(done.stdout.strip().splitlines()[-1]))
+        log(f"round {k + 1} of {rounds}: N={large} "
+            f"{runs[large][-1]['us_per_equation']:.1f} us/equation, N={small} "
+            + " ".join(f"{r['us_per_equation']:.1f}" for r in runs[small][-per_round:]))
+    spells.append(machine_spells())
+    per = {n: [r["us_per_equation"] for r in rs] for n, rs in runs.items()}
+    stats = {str(n): {"us_per_equation": v, "mean": statistics.mean(v),
+                      "median": statistics.median(v), "min": min(v),
+                      "peak_rss_MB": max(r["peak_rss_MB"] for r in runs[n])}
+             for n, v in per.items()}
+    a, b = stats[str(small)], stats[str(large)]
+    growth = {k: b[k] / a[k] for k in ("mean", "median", "min")}
+    log(f"growth per equation N={small} to {large}: means {growth['mean']:.3f} "
+        f"(goal < 1.3), medians {growth['median']:.3f}, minima {growth['min']:.3f}; "
+        f"slow share of the machine {spells[0]['slow_share']:.2f}, "
+        f"{spells[1]['slow_share']:.2f}")
+    return {"small": small, "large": large, "rounds": rounds, "per_round": per_round,
+            "sizes": stats, "growth": growth, "goal": 1.3, "met": growth["mean"] < 1.3,
+            "machine_spells_before_after": spells}
+
+
+def run_growth(quick: bool = False, rounds: int = 4) -> dict:
+    """Growth of the compile time per equation, N = 1000 to 100000 (issue 17)."""
+    return {"benchmark": "scaling_growth",
+            "compile_growth": compile_growth(rounds=1 if quick else rounds)}
+
+
 def _exponents(rows: list[dict], key, same_grid: bool = False) -> list[dict]:
     """Growth exponents between successive rows; with ``same_grid``, only between rows
     that logged the same number of output points (None otherwise)."""
@@ -353,6 +421,16 @@ def run_large(quick: bool = False) -> dict:
 if __name__ == "__main__":
     if "--compile-one" in sys.argv:      # one size in this process (compile_scaling)
         print(json.dumps(compile_once(int(sys.argv[sys.argv.index("--compile-one") + 1]))))
+    elif "--growth" in sys.argv:
+        at = sys.argv.index("--growth")
+        rounds = int(sys.argv.pop(at + 1)) if sys.argv[at + 1:at + 2] and \
+            sys.argv[at + 1].isdigit() else 4
+        sys.argv.pop(at)
+
+        def growth(quick: bool = False) -> dict:
+            """Growth of the compile time per equation, N = 1000 to 100000 (issue 17)."""
+            return run_growth(quick, rounds)
+        main(growth)
     elif "--large" in sys.argv:
         sys.argv.remove("--large")
         main(run_large)
