@@ -126,14 +126,15 @@ class _RowsOf:
 
 
 class FoldedPort:
-    """A folded subsystem port: its across variables equal those of the node's first
-    member ``node``; each through variable is the sum of those of the members ``flow``
-    (paths of the inside members of its set)."""
+    """A folded subsystem port: each of its variables is the sum of the model variables
+    in ``terms`` (their rows, one list per variable in declaration order): an across
+    variable that of the node's first member, a through variable those of the inside
+    members of its set."""
 
-    __slots__ = ("path", "cls", "node", "flow", "position", "order")
+    __slots__ = ("path", "cls", "terms", "position", "order")
 
-    def __init__(self, path, cls, node, flow, position, order):
-        self.path, self.cls, self.node, self.flow = path, cls, node, flow
+    def __init__(self, path, cls, terms, position, order):
+        self.path, self.cls, self.terms = path, cls, terms
         self.position = position    # how many model variables were declared before it
         self.order = order
 
@@ -256,17 +257,13 @@ class FlatModel:
     folded: list["FoldedPort"] = field(default_factory=list)
 
     def folded_variables(self):
-        """``(name, unit, doc, position, terms)`` of each variable of a folded port: the
-        sum ``terms`` ``[(variable name, coefficient)]`` of the model's variables, logged
-        after the first ``position`` variables of the model."""
+        """``(name, unit, doc, position, rows)`` of each variable of a folded port: the
+        sum of the model's variables in ``rows``, logged after the first ``position``
+        variables of the model."""
         for port in self.folded:
             plan = _declaration_plan(port.cls)[1]
-            for key, kind, unit, doc, *_ in plan:
-                if kind == "across":
-                    terms = [(f"{port.node}.{key}", 1.0)]
-                else:
-                    terms = [(f"{path}.{key}", 1.0) for path in port.flow]
-                yield f"{port.path}.{key}", unit, doc, port.position, terms
+            for (key, _, unit, doc, *_), rows in zip(plan, port.terms):
+                yield f"{port.path}.{key}", unit, doc, port.position, rows
 
     @property
     def n_folded(self) -> int:
@@ -436,6 +433,7 @@ def _declaration_order(flat: FlatModel) -> None:
     for port in flat.folded:        # still folded: after the ports declared before it
         port.position += sum(len(names) for position, k, names in late
                              if (position, k) < (port.position, port.order))
+        port.terms = [[moved_to[r] for r in rows] for rows in port.terms]
 
 
 class _Problems(list):
@@ -1597,11 +1595,23 @@ class _Joined:
 
 
 def _folded_variables(flat: FlatModel, folded, folding) -> None:
-    """Record the folded ports, for logging their variables (`FlatModel.folded`)."""
-    node, flow = folding.node, folding.flow
-    flat.folded = [FoldedPort(port.path, type(port), node[pid].path, flow[pid],
-                              port._syms.position, port._syms.order)
-                   for pid, port in folded.items()]
+    """Record the folded ports, for logging their variables (`FlatModel.folded`): the
+    rows of the variables each one sums, read off the rows of the member ports (each
+    port's own class places the key)."""
+    node, flow, rows = folding.node, folding.flow, flat.__dict__["_rows"]
+    out = []
+    for pid, port in folded.items():
+        first, members = node[pid].port, flow[pid]
+        terms = []
+        for key, kind, *_ in _declaration_plan(type(port))[1]:
+            if kind == "across":
+                terms.append([rows[id(first)] + _binding_plan(type(first))[4][key]])
+            else:
+                terms.append([rows[id(m.port)] + _binding_plan(type(m.port))[4][key]
+                              for m in members])
+        out.append(FoldedPort(port.path, type(port), terms, port._syms.position,
+                              port._syms.order))
+    flat.folded = out
 
 
 @functools.lru_cache(maxsize=None)

@@ -32,6 +32,8 @@ variable on first read and stays a member of its node (see ``flatten._FoldedSymb
 
 from __future__ import annotations
 
+from operator import attrgetter
+
 from mechatron.core.component import Component, Connect, Connector, System
 from mechatron.core.connections import Member, connection_sets
 from mechatron.core.declarations import Input
@@ -158,7 +160,7 @@ class Joining:
     def __init__(self):
         self.groups: list[list[Member]] = []
         self.node: dict[int, Member] = {}
-        self.flow: dict[int, list[str]] = {}
+        self.flow: dict[int, list[Member]] = {}
 
 
 def join_planned(sets, planned: dict, folded: dict) -> Joining:
@@ -201,7 +203,7 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
             el, plan, k = where[id(port)]
             members, nested = members_of(el, plan.sets[k][1])
             got = expanded[id(port)] = (members, [port] + nested)
-            out.flow[id(port)] = [m.path for m in members]
+            out.flow[id(port)] = members
         return got
 
     groups = out.groups
@@ -242,13 +244,13 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
     return out
 
 
+#: a member's place in its node: by path, the inside element first
+_order = attrgetter("path", "outside")
+
+
 def _add(out: Joining, node: list, ports: list) -> None:
     node.sort(key=_order)
     out.groups.append(node)
     first = node[0]
     for port in ports:
         out.node[id(port)] = first
-
-
-def _order(m: Member) -> tuple:
-    return (m.path, m.outside)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import gc
 import time as _time
 from collections.abc import Mapping
+from itertools import chain
 
 import casadi as ca
 import numpy as np
@@ -104,10 +105,10 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
             out[at] = extra
             out[~is_folded] = own
             merged.append(out.tolist())
-        index = flat.variable_rows()
         t_row = np.repeat(at, [len(f[4]) for f in folded])
-        t_var = np.array([index[term] for f in folded for term, _ in f[4]], dtype=np.intp)
-        t_coef = np.array([c for f in folded for _, c in f[4]], dtype=float) * scale[t_var]
+        t_var = np.fromiter(chain.from_iterable(f[4] for f in folded), dtype=np.intp,
+                            count=t_row.size)
+        t_coef = scale[t_var]
         t_rep = rep[t_var]
         gone = t_rep < 0
         np.add.at(constant, t_row[gone], t_coef[gone])
