@@ -296,7 +296,11 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
     per = {n: [r["us_per_equation"] for r in rs] for n, rs in runs.items()}
     stats = {str(n): {"us_per_equation": v, "mean": statistics.mean(v),
                       "median": statistics.median(v), "min": min(v),
-                      "peak_rss_MB": max(r["peak_rss_MB"] for r in runs[n])}
+                      "peak_rss_MB": max(r["peak_rss_MB"] for r in runs[n]),
+                      # each run's passes, us per flat equation
+                      "passes_us_per_equation": [
+                          {k: 1e6 * t / r["equations_flat"]
+                           for k, t in r["passes_cpu_s"].items()} for r in runs[n]]}
              for n, v in per.items()}
     a, b = stats[str(small)], stats[str(large)]
     growth = {k: b[k] / a[k] for k in ("mean", "median", "min")}
