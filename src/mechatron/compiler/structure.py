@@ -351,7 +351,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             max(es) < n_orig and max(vs) < var_vec.numel()
             and not (reduced and any(e in reduced for e in es)))):
         given = (res_vec, var_vec, reduction.jacobian, pattern, reduction.entries)
-    bulk_x, bulk_expr, bulk_at = _solve_singles(res, var_syms, singles, given)
+    bulk_x, bulk_solved, bulk_sols, bulk_at = _solve_singles(res, var_syms, singles, given)
     out.largest_block = max((len(b.equations) for b in blocks), default=0)
     # the assignments in block order: the bulk solutions stay stacked (an index into
     # them), the others are scalars (-1 - their index); one gather orders them at the end
@@ -387,10 +387,13 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         _solve_block(out, assign, eqs, vs, adj, res, var_syms, var_names, coefficient,
                      unknown_names)
     if order:
-        n_bulk = bulk_x.numel()
+        # one copy of each stacked vector in the order of the blocks: the solved
+        # variables read off the singles' column, the expressions off their pieces
+        n_bulk = len(bulk_solved)
         at = [k if k >= 0 else n_bulk - 1 - k for k in order]
-        out.assigned = ca.vertcat(bulk_x, *syms)[at]
-        out.assigned_expr = ca.vertcat(bulk_expr, *exprs)[at]
+        out.assigned = bulk_x[[bulk_solved[k] for k in order]] if not syms else \
+            ca.vertcat(bulk_x[bulk_solved], *syms)[at]
+        out.assigned_expr = ca.vertcat(*bulk_sols, *exprs)[at]
     for v in states:
         out.ode.append(var_syms[var_to_diff[v]])
     ders = [var_to_diff[v] for v in states]
@@ -564,7 +567,8 @@ def _is_symbol(expr: ca.SX, name: str) -> bool:
 
 def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
                    singles: list[tuple[int, int]],
-                   given: tuple | None = None) -> tuple[ca.SX, ca.SX, dict[int, int]]:
+                   given: tuple | None = None) -> tuple[ca.SX, list[int], list[ca.SX],
+                                                        dict[int, int]]:
     """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
     them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
     where ``J = de/dx`` is free of ``x`` and not 0.
@@ -573,9 +577,11 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     only, not the variables of other blocks that appear in ``e``: the blocks are
     coloured so that no equation holds the variable of another block of its colour
     (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
-    takes one substitution. Returns ``(x, expr, at)``: the solved variables and their
-    expressions stacked (by colour), and ``{e: row of x}``; the others (not linear in
-    their variable) are left to the equation-by-equation path.
+    takes one substitution. Returns ``(X, solved, exprs, at)``: the variables of all
+    the blocks stacked, the rows of X solved (colour by colour), the expressions of
+    those rows in pieces (one per colour, to be stacked once by the caller), and
+    ``{e: place among the solved}``; the others (not linear in their variable) are left
+    to the equation-by-equation path.
 
     ``given = (R, V, J, S, entries)``: the residuals and variables stacked, the
     Jacobian of R in V, its sparsity and the rows and columns of its entries (column by
@@ -584,7 +590,7 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     computed again."""
     n = len(singles)
     if n < 2:
-        return ca.SX(0, 1), ca.SX(0, 1), {}
+        return ca.SX(0, 1), [], [], {}
     es, vs = (list(a) for a in zip(*singles))
     if given is not None:
         R, V, J, S, entries = given
@@ -638,19 +644,16 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         if k == len(classes):
             classes.append([])
         classes[k].append(i)
-    xs_all, sols = [], []
+    sols = []
     for idx in classes:
         # slices of the stacked vectors (indexing by a list of ints stays in C++; a
         # vertcat of the scalars converts each one from Python)
         ex, xs, ds = E[idx], X[idx], d[idx]
         rest = ca.substitute(ex, xs, ca.DM.zeros(len(idx)))
-        xs_all.append(xs)
         sols.append(-rest / ds)
     solved = [i for idx in classes for i in idx]
     at = {es[i]: k for k, i in enumerate(solved)}
-    if not solved:
-        return ca.SX(0, 1), ca.SX(0, 1), {}
-    return ca.vertcat(*xs_all), ca.vertcat(*sols), at
+    return X, solved, sols, at
 
 
 def _sub_entries(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int],
