@@ -1009,11 +1009,20 @@ def _collect_equations(flat: FlatModel, elements, problems,
     return connects
 
 
+class _Derivatives(dict):
+    """Derivative symbols made in bulk for the template instances, ``{variable name:
+    row}`` in ``column``, each symbol in ``syms`` (see `_template_derivatives`)."""
+
+    __slots__ = ("column", "syms")
+
+
 def _template_derivatives(components) -> dict:
     """The derivative symbols the template instances among ``components`` ``(element,
-    template, planned)`` will take, ``{variable name: symbol}``, made in one call; each
-    is registered with the build context (`BuildContext.der_symbol`) only when its
-    instance is added, so that the context lists derivatives in the order they are met."""
+    template, planned)`` will take, made in one call (`_Derivatives`); each is
+    registered with the build context (`BuildContext.der_symbol`) only when its
+    instance is added, so that the context lists derivatives in the order they are met,
+    and its row is kept for `_Template.instantiate`, which takes the instances'
+    derivatives from the column by their rows."""
     names = []
     for el, tpl, _ in components:
         if tpl is not None and tpl.derived:
@@ -1025,7 +1034,9 @@ def _template_derivatives(components) -> dict:
                 names.extend([rel[i][1:] for i in tpl.derived])
     if not names:
         return {}
-    return dict(zip(names, _symbols([f"der({n})" for n in names])[1]))
+    out = _Derivatives(zip(names, range(len(names))))
+    out.column, out.syms = _symbols([f"der({n})" for n in names])
+    return out
 
 
 @functools.lru_cache(maxsize=None)
@@ -1056,7 +1067,7 @@ class _Template:
                  "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
                  "row_hints", "row_bases", "column", "var_column", "model_name",
-                 "slots", "slot_keys")
+                 "slots", "slot_keys", "der_rows", "der_column")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=(), model_name=""):
@@ -1098,6 +1109,10 @@ class _Template:
         #: the parameter slots, each the same row after the element's first parameter
         self.par_slots = par_slots
         self.par_bases: list = []   # each instance's parameter rows (-1: not known)
+        #: each instance's derivatives by their rows in `der_column` (made in bulk, see
+        #: `_template_derivatives`), -1 for a derivative made otherwise
+        self.der_rows: list = []
+        self.der_column: ca.SX | None = None
         self.aliases = [_alias_pattern(r, index, variables)
                         for r in ca.vertsplit(residuals)] if lhs else []
         rel = self.relative
@@ -1151,17 +1166,25 @@ class _Template:
             names = [owner + rel[i] for i in self.derived] if owner else \
                 [rel[i][1:] for i in self.derived]
             ctx = flat.context
+            der_rows = self.der_rows
             for name in names:
                 sym = ctx.derivative.get(name)
+                k = -1
                 if sym is None:
-                    sym = ders.pop(name, None) if ders else None
-                    if sym is None:
+                    k = ders.pop(name, -1) if ders else -1
+                    if k < 0:
                         sym = ctx.der_symbol(name)
                     else:                   # as der_symbol registers a new one
+                        sym = ders.syms[k]
                         key = f"der({name})"
                         ctx.derivative[name] = sym
                         ctx.integral[key] = name
                         ctx.unknowns[key] = sym
+                        if self.der_column is None:
+                            self.der_column = ders.column
+                        elif self.der_column is not ders.column:
+                            k = -1
+                der_rows.append(k)
                 args.append(sym)
         args.append(flat.context.time)
         self.instances.append(args)
@@ -1237,8 +1260,12 @@ class _Template:
             ders = [i for i in others if i not in par_slots and i != width - 1]
             parts = [var_part, ca.reshape(parameters[rows.tolist()], len(par_slots), n)]
             if ders:
-                parts.append(ca.reshape(ca.vertcat(
-                    *[args[i] for args in self.instances for i in ders]), len(ders), n))
+                bulk = ders == list(range(len(self.relative), width - 1)) and \
+                    self.der_column is not None and min(self.der_rows) >= 0
+                parts.append(ca.reshape(
+                    self.der_column[self.der_rows] if bulk else ca.vertcat(
+                        *[args[i] for args in self.instances for i in ders]),
+                    len(ders), n))
             parts.append(ca.repmat(flat.context.time, 1, n))
             stacked = ca.vertcat(*parts)
             order = slots + par_slots + ders + [width - 1]
@@ -1870,8 +1897,16 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
             name = ctx.integral.get(eq.residual.name()) if eq.residual.is_symbolic() else None
             if name:
                 flat.discrete[name] = "real"
+    # per class: its Discrete declarations, and whether it writes initial equations
+    # (worked out once per class, not once per element)
+    info: dict[type, tuple] = {}
     for el in elements:
-        for key, decl in _discrete_keys(type(el)):
+        cls = type(el)
+        got = info.get(cls)
+        if got is None:
+            got = info[cls] = (_discrete_keys(cls), isinstance(el, Component) and
+                               bool(_own_methods(cls, "initial_equations")))
+        for key, decl in got[0]:
             path = _join(el.path, key)
             sym_name = flat.variables[path].sym.name()
             if sym_name not in flat.discrete and sym_name in ctx.derivative:
@@ -1884,7 +1919,7 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
                     "(discrete variable, changed only by events)", el.path))
             flat.discrete[sym_name] = decl.discrete_kind
     for el in elements:
-        if not isinstance(el, Component) or not _own_methods(type(el), "initial_equations"):
+        if not info[type(el)][1]:
             continue
         for klass, items in _class_calls(el, "initial_equations", el.path):
             for k, item in enumerate(_as_equations(items)):
