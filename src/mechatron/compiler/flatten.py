@@ -1626,18 +1626,27 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     rows of the variables each one sums, read off the rows of the member ports (each
     port's own class places the key)."""
     node, flow, rows = folding.node, folding.flow, flat.__dict__["_rows"]
+    offsets = {}            # class -> {key: place among its variables}
+    keys = {}               # class -> [(key, is an across variable)]
     out = []
     for pid, port in folded.items():
-        first, members = node[pid].port, flow[pid]
-        terms = []
-        for key, kind, *_ in _declaration_plan(type(port))[1]:
-            if kind == "across":
-                terms.append([rows[id(first)] + _binding_plan(type(first))[4][key]])
-            else:
-                terms.append([rows[id(m.port)] + _binding_plan(type(m.port))[4][key]
-                              for m in members])
-        out.append(FoldedPort(port.path, type(port), terms, port._syms.position,
-                              port._syms.order))
+        cls = type(port)
+        own = keys.get(cls)
+        if own is None:
+            own = keys[cls] = [(key, kind == "across")
+                               for key, kind, *_ in _declaration_plan(cls)[1]]
+        first = node[pid].port
+        members = []
+        for p in [first] + [m.port for m in flow[pid]]:
+            at = offsets.get(type(p))
+            if at is None:
+                at = offsets[type(p)] = _binding_plan(type(p))[4]
+            members.append((rows[id(p)], at))
+        (b0, o0), inside = members[0], members[1:]
+        terms = [[b0 + o0[key]] if across else [b + o[key] for b, o in inside]
+                 for key, across in own]
+        syms = port._syms
+        out.append(FoldedPort(port.path, cls, terms, syms.position, syms.order))
     flat.folded = out
 
 

@@ -74,18 +74,19 @@ def plan_subsystems(model: Component, elements) -> tuple[dict, dict]:
         plan = plans.get(cls, 0)
         if plan is None:
             continue
-        if any(k not in _PLAIN_KEYS and k not in el._children for k in el.__dict__):
+        children = el._children
+        if el.__dict__.keys() - _PLAIN_KEYS - children.keys():
             continue                    # instance attributes: connections may differ
         if plan == 0:
             plan = plans[cls] = _plan(el)
             if plan is None:
                 continue
-        children = el._children
-        if any(children[name]._starts for name in plan.own):
+        ports = [children[name] for name in plan.own]
+        if any(port._starts for port in ports):
             continue                    # a start value on a port: written out
         planned[id(el)] = (el, plan)
-        for name in plan.own:
-            folded[id(children[name])] = children[name]
+        for port in ports:
+            folded[id(port)] = port
     return planned, folded
 
 
