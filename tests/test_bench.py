@@ -115,3 +115,31 @@ def test_hand_written_c_peer_is_the_dc_motor_rk4_step(tmp_path):
     desk = mt.simulate(cm, 0.2, solver="rk4", dt=h)
     np.testing.assert_allclose(x_c, [desk.final("inductor.i"), desk.final("inertia.w")],
                                rtol=1e-12)
+
+
+def test_compile_growth_reads_what_its_fresh_processes_write(run_all, monkeypatch):
+    """``bench_scaling.py --growth`` at a tiny size: one round of a ladder of 10 and two
+    of 5, each compiled in a fresh process; its growth figures are the ratios of the
+    sizes' means, medians and minima (what is printed is computed from what ran)."""
+    import bench_scaling
+
+    monkeypatch.setattr(bench_scaling, "machine_spells",
+                        lambda seconds=10.0: {"slow_share": 0.0})
+    out = bench_scaling.compile_growth(rounds=1, small=5, large=10, per_round=2)
+    small, large = out["sizes"]["5"], out["sizes"]["10"]
+    assert len(small["us_per_equation"]) == 2 and len(large["us_per_equation"]) == 1
+    for stat in ("mean", "median", "min"):
+        assert out["growth"][stat] == pytest.approx(large[stat] / small[stat])
+    assert out["met"] == (out["growth"]["mean"] < out["goal"])
+    assert set(large["passes_us_per_equation"][0]) >= {"flatten", "structure", "total"}
+
+
+def test_machine_spells_counts_its_loops():
+    sys.path.insert(0, str(BENCH))
+    try:
+        import bench_scaling
+    finally:
+        sys.path.remove(str(BENCH))
+    got = bench_scaling.machine_spells(seconds=0.2)
+    assert got["loops"] > 0 and got["fastest_ms"] > 0
+    assert 0.0 <= got["slow_share"] <= 1.0 and got["slowest_over_fastest"] >= 1.0
