@@ -299,3 +299,58 @@ def test_a_hybrid_model_compiles_the_same_with_and_without_templates(monkeypatch
                         fb(*args) if fb.n_out() > 1 else [fb(*args)]):
             np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-12,
                                        atol=1e-12, err_msg=name)
+
+
+class Watched(mt.Component):
+    """A capacitor from p to n whose voltage rate the parent reads: its derivative is
+    made by the parent's equations, before the capacitor's template instance is added."""
+
+    p = el.Pin(doc="Top")
+    n = el.Pin(doc="Bottom")
+    rate = mt.Variable("V/s", doc="Voltage rate of the capacitor")
+    c = el.Capacitor(C=2e-3)
+
+    def equations(self):
+        return [mt.connect(self.p, self.c.p), mt.connect(self.c.n, self.n),
+                self.rate == mt.der(self.c.v)]
+
+
+@pytest.mark.parametrize("watched", [(), (1,), (0, 2)])
+def test_derivatives_made_before_their_instance_give_the_same_residuals(watched,
+                                                                          monkeypatch):
+    """Template instances take their derivative symbols from the column made in bulk
+    (`_template_derivatives`) by row; when an instance's derivative was made before (by
+    the equations of its parent), its template stacks the symbols one by one instead.
+    Either way: the residuals of flattening without templates, and an RC discharge."""
+    def build():
+        m = mt.System("watched")
+        g = m.add("g", el.ElectricalReference())
+        src = m.add("src", el.DCVoltageSource(V=2.0))
+        m.connect(src.n, g.port)
+        for k in range(3):
+            r = m.add(f"r{k}", el.Resistor(R=10.0 * (k + 1)))
+            m.connect(src.p, r.p)
+            if k in watched:
+                w = m.add(f"w{k}", Watched())
+                m.connect(r.n, w.p)
+                m.connect(w.n, g.port)
+            else:
+                c = m.add(f"c{k}", el.Capacitor(C=2e-3))
+                m.connect(r.n, c.p)
+                m.connect(c.n, g.port)
+        return m
+    flat = fl.flatten(build())
+    template = next(e.origin.template for e in flat.equations
+                    if e.owner in ("c0", "w0.c") and hasattr(e.origin, "template"))
+    assert (min(template.der_rows) >= 0) == (not watched)
+    with_templates, without = flat_both(build, monkeypatch)
+    assert [str(e.residual) for e in with_templates.equations] == \
+        [str(e.residual) for e in without.equations]
+    res = mt.simulate(build(), 0.05)
+    for k in range(3):
+        tau = 10.0 * (k + 1) * 2e-3
+        v = res[f"w{k}.c.v" if k in watched else f"c{k}.v"]
+        np.testing.assert_allclose(v, 2.0 * (1 - np.exp(-res.t / tau)), atol=2e-5)
+        if k in watched:
+            np.testing.assert_allclose(res[f"w{k}.rate"], 2.0 / tau * np.exp(-res.t / tau),
+                                       rtol=1e-3, atol=1e-2)
