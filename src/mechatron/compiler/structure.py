@@ -389,11 +389,11 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     if order:
         # one copy of each stacked vector in the order of the blocks: the solved
         # variables read off the singles' column, the expressions off their pieces
-        n_bulk = len(bulk_solved)
-        at = [k if k >= 0 else n_bulk - 1 - k for k in order]
-        out.assigned = bulk_x[[bulk_solved[k] for k in order]] if not syms else \
-            ca.vertcat(bulk_x[bulk_solved], *syms)[at]
-        out.assigned_expr = ca.vertcat(*bulk_sols, *exprs)[at]
+        n_x, n_bulk = bulk_x.numel(), len(bulk_solved)
+        out.assigned = (ca.vertcat(bulk_x, *syms) if syms else bulk_x)[
+            [bulk_solved[k] if k >= 0 else n_x - 1 - k for k in order]]
+        out.assigned_expr = ca.vertcat(*bulk_sols, *exprs)[
+            [k if k >= 0 else n_bulk - 1 - k for k in order]]
     for v in states:
         out.ode.append(var_syms[var_to_diff[v]])
     ders = [var_to_diff[v] for v in states]
