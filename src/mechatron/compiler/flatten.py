@@ -1180,10 +1180,7 @@ class _Template:
                         ctx.derivative[name] = sym
                         ctx.integral[key] = name
                         ctx.unknowns[key] = sym
-                        if self.der_column is None:
-                            self.der_column = ders.column
-                        elif self.der_column is not ders.column:
-                            k = -1
+                        self.der_column = ders.column   # one column per flattening
                 der_rows.append(k)
                 args.append(sym)
         args.append(flat.context.time)
@@ -1261,7 +1258,7 @@ class _Template:
             parts = [var_part, ca.reshape(parameters[rows.tolist()], len(par_slots), n)]
             if ders:
                 bulk = ders == list(range(len(self.relative), width - 1)) and \
-                    self.der_column is not None and min(self.der_rows) >= 0
+                    min(self.der_rows) >= 0
                 parts.append(ca.reshape(
                     self.der_column[self.der_rows] if bulk else ca.vertcat(
                         *[args[i] for args in self.instances for i in ders]),
@@ -1627,26 +1624,22 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     port's own class places the key)."""
     node, flow, rows = folding.node, folding.flow, flat.__dict__["_rows"]
     offsets = {}            # class -> {key: place among its variables}
-    keys = {}               # class -> [(key, is an across variable)]
+
+    def place(port):
+        """The row of ``port``'s first variable, and its class's offsets of keys."""
+        at = offsets.get(type(port))
+        if at is None:
+            at = offsets[type(port)] = _binding_plan(type(port))[4]
+        return rows[id(port)], at
+
     out = []
     for pid, port in folded.items():
-        cls = type(port)
-        own = keys.get(cls)
-        if own is None:
-            own = keys[cls] = [(key, kind == "across")
-                               for key, kind, *_ in _declaration_plan(cls)[1]]
-        first = node[pid].port
-        members = []
-        for p in [first] + [m.port for m in flow[pid]]:
-            at = offsets.get(type(p))
-            if at is None:
-                at = offsets[type(p)] = _binding_plan(type(p))[4]
-            members.append((rows[id(p)], at))
-        (b0, o0), inside = members[0], members[1:]
-        terms = [[b0 + o0[key]] if across else [b + o[key] for b, o in inside]
-                 for key, across in own]
+        b0, o0 = place(node[pid].port)
+        inside = [place(m.port) for m in flow[pid]]
+        terms = [[b0 + o0[key]] if kind == "across" else [b + o[key] for b, o in inside]
+                 for key, kind, *_ in _declaration_plan(type(port))[1]]
         syms = port._syms
-        out.append(FoldedPort(port.path, cls, terms, syms.position, syms.order))
+        out.append(FoldedPort(port.path, type(port), terms, syms.position, syms.order))
     flat.folded = out
 
 
