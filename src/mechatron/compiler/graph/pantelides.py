@@ -23,8 +23,8 @@ differential-algebraic systems", SIAM J. Sci. Stat. Comput. 9(2), 1988; J. D. Pr
 from __future__ import annotations
 
 from collections.abc import Sequence
-from itertools import chain
 from dataclasses import dataclass, field
+from itertools import chain
 
 import numpy as np
 
