@@ -19,13 +19,18 @@ import pytest
 BENCH = Path(__file__).resolve().parents[1] / "bench"
 
 
-@pytest.fixture(scope="module")
-def run_all():
+def _bench_module(name: str):
+    """Import ``bench/<name>.py`` with bench/ on the path for the fixture's lifetime."""
     sys.path.insert(0, str(BENCH))
     try:
-        yield importlib.import_module("run_all")
+        yield importlib.import_module(name)
     finally:
         sys.path.remove(str(BENCH))
+
+
+@pytest.fixture(scope="module")
+def run_all():
+    yield from _bench_module("run_all")
 
 
 @pytest.fixture(scope="module")
@@ -119,11 +124,7 @@ def test_hand_written_c_peer_is_the_dc_motor_rk4_step(tmp_path):
 
 @pytest.fixture(scope="module")
 def bench_scaling():
-    sys.path.insert(0, str(BENCH))
-    try:
-        yield importlib.import_module("bench_scaling")
-    finally:
-        sys.path.remove(str(BENCH))
+    yield from _bench_module("bench_scaling")
 
 
 def test_compile_growth_reads_what_its_fresh_processes_write(bench_scaling, monkeypatch):
