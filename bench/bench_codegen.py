@@ -11,7 +11,8 @@ operation_profile`), at the clock that ``/proc/cpuinfo`` reports (a boost clock 
 it). Goal: the DC motor's RK4 step under 100 ns.
 
 Peer: the DC motor's RK4 step written by hand in C (``bench/c/dc_motor_rk4.c``: the same
-step, runtime parameters, every logged variable), built with the same flags and timed in
+step, runtime parameters, every logged variable, called through a volatile pointer so
+that it is not inlined into its timing loop), built with the same flags and timed in
 turns with the generated harness in the same run (best of each over stack alignments,
 see ``PADS``). Goal (issue 17): the
 generated step within 1.15x of the hand-written one.
