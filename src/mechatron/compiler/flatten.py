@@ -1064,7 +1064,7 @@ class _Template:
     instance, as before."""
 
     __slots__ = ("keys", "ports", "derived", "svec", "lhs", "rhs", "fun", "instances",
-                 "equations", "n_eq", "aliases", "relative", "var_slots", "paths",
+                 "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
                  "row_hints", "row_bases", "column", "var_column", "model_name",
                  "slots", "slot_keys", "der_rows", "der_column")
@@ -1081,7 +1081,6 @@ class _Template:
         self.fun = ca.Function("template", [self.svec], [residuals])
         self.instances: list = []   # SX column of each instance's symbols
         self.paths: list = []       # each instance's path
-        self.equations: list = []   # FlatEquation of each instance, in order
         #: every instance's residuals stacked, instance after instance (`instantiate`)
         self.column: ca.SX | None = None
         #: the column of the variables that instances' rows refer to (see `add`)
@@ -1201,10 +1200,8 @@ class _Template:
         else:
             hints = self.root_hints
         first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
-        eqs = [_TemplateEquation(self, owner, hint, first + k)
-               for k, hint in enumerate(hints)]
-        self.equations.append(eqs)
-        flat.equations += eqs
+        flat.equations += [_TemplateEquation(self, owner, hint, first + k)
+                           for k, hint in enumerate(hints)]
 
     def instantiate(self, flat: FlatModel) -> None:
         """Every instance's residuals from one call of the mapped function."""
