@@ -176,37 +176,7 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
             if id(port) in folded:
                 where[id(port)] = (el, plan, k)
     out = Joining()
-    expanded: dict[int, tuple[list, list]] = {}
-    # folded ports joined into a node outside their subsystem (instances come parents
-    # first, so a nested port is joined before its own subsystem is reached)
-    joined_outside: set[int] = set()
-
-    def members_of(el, names_list):
-        members, ports = [], []
-        for names in names_list:
-            port = el
-            for name in names:
-                port = port._children[name]
-            if id(port) in where:
-                inner, nested = inner_of(port)
-                members.extend(inner)
-                ports.extend(nested)
-                joined_outside.add(id(port))
-            else:
-                members.append(Member(port, False))
-        return members, ports
-
-    def inner_of(port):
-        """The inside members of a folded port's set, nested ports resolved, and the
-        folded ports met on the way (itself first)."""
-        got = expanded.get(id(port))
-        if got is None:
-            el, plan, k = where[id(port)]
-            members, nested = members_of(el, plan.sets[k][1])
-            got = expanded[id(port)] = (members, [port] + nested)
-            out.flow[id(port)] = members
-        return got
-
+    expand = _Expansion(where, out)
     groups = out.groups
     for cset in sets:
         if cset.is_signal:
@@ -218,10 +188,10 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
         node, ports = [], []
         for m in members:
             if id(m.port) in where and not m.outside:
-                inner, nested = inner_of(m.port)
+                inner, nested = expand.inner_of(m.port)
                 node.extend(inner)
                 ports.extend(nested)
-                joined_outside.add(id(m.port))
+                expand.joined_outside.add(id(m.port))
             else:
                 node.append(m)
         _add(out, node, ports)
@@ -229,20 +199,65 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
         children = el._children
         for owner, names_list in plan.sets:
             if owner is None:           # a node inside the subsystem only
-                node, ports = members_of(el, names_list)
+                node, ports = expand.members_of(el, names_list)
             else:
                 port = children[owner]
                 if id(port) not in where:       # read by an equation: a member itself
-                    node, ports = members_of(el, names_list)
+                    node, ports = expand.members_of(el, names_list)
                     node.insert(0, Member(port, True))
-                elif id(port) in joined_outside:
+                elif id(port) in expand.joined_outside:
                     continue
                 else:                   # open outside: nothing flows through it
-                    node, ports = inner_of(port)
+                    node, ports = expand.inner_of(port)
                     node, ports = list(node), list(ports)
             _add(out, node, ports)
     groups.sort(key=lambda g: _order(g[0]))
     return out
+
+
+class _Expansion:
+    """The members that folded ports stand for (see `join_planned`), each port's
+    resolved once. (A class, not two closures that call each other: their cells would
+    form a cycle that keeps every dictionary here alive until the cyclic garbage
+    collector runs.)"""
+
+    __slots__ = ("where", "out", "expanded", "joined_outside")
+
+    def __init__(self, where: dict, out: Joining):
+        self.where = where      # id(folded port) -> (instance, plan, set index)
+        self.out = out
+        self.expanded: dict[int, tuple[list, list]] = {}
+        # folded ports joined into a node outside their subsystem (instances come
+        # parents first, so a nested port is joined before its own subsystem is reached)
+        self.joined_outside: set[int] = set()
+
+    def members_of(self, el, names_list) -> tuple[list, list]:
+        """The members of the ports ``names_list`` of ``el``, folded ones resolved, and
+        the folded ports met on the way."""
+        members, ports = [], []
+        for names in names_list:
+            port = el
+            for name in names:
+                port = port._children[name]
+            if id(port) in self.where:
+                inner, nested = self.inner_of(port)
+                members.extend(inner)
+                ports.extend(nested)
+                self.joined_outside.add(id(port))
+            else:
+                members.append(Member(port, False))
+        return members, ports
+
+    def inner_of(self, port) -> tuple[list, list]:
+        """The inside members of a folded port's set, nested ports resolved, and the
+        folded ports met on the way (itself first)."""
+        got = self.expanded.get(id(port))
+        if got is None:
+            el, plan, k = self.where[id(port)]
+            members, nested = self.members_of(el, plan.sets[k][1])
+            got = self.expanded[id(port)] = (members, [port] + nested)
+            self.out.flow[id(port)] = members
+        return got
 
 
 #: a member's place in its node: by path, the inside element first
