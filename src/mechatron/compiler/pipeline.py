@@ -160,6 +160,10 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         lap("dimensions")
 
     alias = eliminate_aliases(flat)
+    # no pass after this one reads the flat equations and aliases (the residuals,
+    # origins and owners kept live on in `alias`): let them go now, so that the
+    # structural analysis reuses their memory instead of touching fresh pages
+    flat.equations = flat.aliases = None
     lap("alias")
 
     ctx = flat.context
