@@ -174,3 +174,39 @@ def test_template_instances_take_their_variables_by_row():
     formed = [n for n, v in flat.variables.items()
               if isinstance(v, fl._ColumnVariable) and fl._SYM_SLOT.__get__(v) is not None]
     assert not [n for n in formed if n.startswith(("r", "c", "l"))]
+
+
+def _same(a, b) -> bool:
+    return ca.is_equal(ca.SX(a), ca.SX(b), 0)
+
+
+@pytest.mark.parametrize("reads", [0, 1, 3, 40])
+def test_column_rows_read_as_the_list_of_the_column_scalars(reads):
+    """`ColumnRows` forms a row when read, all rows at once after many single reads, and
+    otherwise behaves as the list ``vertsplit`` would give: indices from either end,
+    slices, replaced and appended items, copies that do not share their changes."""
+    x = ca.SX.sym("x", 50)
+    column = ca.sin(x) * 2 + x[::-1]
+    want = ca.vertsplit(column)
+    rows = fl.ColumnRows(column)
+    for k in range(reads):
+        assert _same(rows[(7 * k) % 50], want[(7 * k) % 50])
+    assert _same(rows[-1], want[-1]) and _same(rows[-50], want[0])
+    assert all(_same(a, b) for a, b in zip(rows[10:20:3], want[10:20:3]))
+    copy = rows.copy()
+    rows[5] = ca.SX(3.0)
+    rows.append(ca.SX(4.0))
+    want_after = want[:5] + [ca.SX(3.0)] + want[6:] + [ca.SX(4.0)]
+    assert len(rows) == 51 and len(copy) == 50
+    assert all(_same(a, b) for a, b in zip(rows, want_after))
+    assert all(_same(a, b) for a, b in zip(copy, want))
+    for change in ("del", "insert"):    # the rows after it move against the column
+        rows = fl.ColumnRows(column)
+        assert _same(rows[1], want[1])
+        if change == "del":
+            del rows[0]
+            assert _same(rows[0], want[1]) and _same(rows[5], want[6])
+        else:
+            rows.insert(2, ca.SX(9.0))
+            assert _same(rows[2], 9.0) and _same(rows[3], want[2])
+        assert len(rows) == 49 + 2 * (change == "insert")

@@ -23,7 +23,7 @@ from operator import attrgetter
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.flatten import FlatEquation, FlatModel, stack_residuals
+from mechatron.compiler.flatten import ColumnRows, FlatEquation, FlatModel, stack_residuals
 from mechatron.errors import InitializationError
 
 __all__ = ["AliasResult", "eliminate_aliases"]
@@ -188,7 +188,7 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         if old is not None:
             stacked = ca.substitute(stacked, old, new)
     if kept:
-        result.residuals = ca.vertsplit(stacked)
+        result.residuals = ColumnRows(stacked)     # each formed when read
         result.stacked = stacked
     return result
 

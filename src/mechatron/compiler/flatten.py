@@ -9,7 +9,7 @@ connections imply (handed to alias elimination rather than written as equations)
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+from collections.abc import Mapping, MutableSequence
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -99,6 +99,72 @@ class _ColumnVariable(FlatVariable):
     @sym.setter
     def sym(self, value):
         _SYM_SLOT.__set__(self, value)
+
+
+class ColumnRows(MutableSequence):
+    """The scalars of an SX column as a list whose items become Python objects when
+    read, not all at once. A model of 10^5 components has a million residuals and
+    unknowns; the structural analysis works on their columns and reads few of them one
+    by one, and each scalar formed from Python costs about 260 bytes. Once more than one
+    row in `BULK` has been read alone, the rest are formed together (one ``vertsplit``),
+    so a pass that reads them all costs what a list would have. Items may be replaced
+    and appended as in a list; `copy` shares the column."""
+
+    __slots__ = ("column", "_items", "_reads", "_formed")
+
+    BULK = 16
+
+    def __init__(self, column: ca.SX, items: list | None = None):
+        self.column = column
+        self._items = [None] * column.numel() if items is None else items
+        self._reads = 0
+        self._formed = False
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self[i] for i in range(*k.indices(len(self._items)))]
+        x = self._items[k]
+        if x is None:
+            self._reads += 1
+            if self._reads * self.BULK > len(self._items):
+                self._form_all()
+                return self._items[k]
+            x = self._items[k] = self.column[k]
+        return x
+
+    def _form_all(self) -> None:
+        if not self._formed:
+            items = self._items
+            for i, x in enumerate(ca.vertsplit(self.column)):
+                if items[i] is None:
+                    items[i] = x
+            self._formed = True
+
+    def __iter__(self):
+        self._form_all()
+        return iter(self._items)
+
+    def __setitem__(self, k, value) -> None:
+        if isinstance(k, slice):
+            self._form_all()
+        self._items[k] = value
+
+    def __delitem__(self, k) -> None:
+        self._form_all()          # the rows after it would move against the column
+        del self._items[k]
+
+    def insert(self, i: int, value) -> None:
+        if i < len(self._items):
+            self._form_all()
+        self._items.insert(i, value)
+
+    def copy(self) -> ColumnRows:
+        out = ColumnRows(self.column, list(self._items))
+        out._reads, out._formed = self._reads, self._formed
+        return out
 
 
 class _RowsOf:

@@ -16,7 +16,7 @@ from mechatron.compiler.dimensions import check_dimensions as _check_dimensions
 from mechatron.compiler.events import Lowering as EventLowering
 from mechatron.compiler.events import (bind_pre, clock_distances, direct_relations,
                                         prepare_events, replace_pre)
-from mechatron.compiler.flatten import flatten
+from mechatron.compiler.flatten import ColumnRows, flatten
 from mechatron.compiler.relations import extract_relations
 from mechatron.compiler.structure import lower
 from mechatron.core.component import Component
@@ -193,7 +193,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     variables = flat.variables
     # in the order of the unknowns, split off their column (a variable's symbol is
     # formed as a Python object only when read: see flatten._ColumnVariable)
-    syms = ca.vertsplit(unknown_col) if alias.unknowns else []
+    syms = ColumnRows(unknown_col) if alias.unknowns else []
     p_value = _OnDemand(lambda: {q.sym.name(): q.value for q in params})
 
     def start_guess(free):

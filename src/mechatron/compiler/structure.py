@@ -17,6 +17,7 @@ from itertools import chain
 import casadi as ca
 import numpy as np
 
+from mechatron.compiler.flatten import ColumnRows
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
 from mechatron.compiler.linear import (Combined, jacobian_apart, owner_of, reveal,
@@ -186,8 +187,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
            preference, declared, roles, classes, physical, parameters,
            stacked=None, others=None) -> Lowered:
     # -- variables of the structural problem: unknowns and their derivatives -------------
-    var_syms: list[ca.SX] = list(syms) if isinstance(syms, list) else \
-        [syms[n] for n in unknowns]
+    var_syms: list[ca.SX] = syms.copy() if isinstance(syms, ColumnRows) else \
+        list(syms) if isinstance(syms, list) else [syms[n] for n in unknowns]
     var_names: list[str] = list(unknowns)
     var_to_diff = [-1] * len(var_syms)
     for i, n in enumerate(unknowns):
@@ -197,7 +198,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             var_syms.append(d)
             var_names.append(f"der({n})")
             var_to_diff.append(-1)
-    res = list(residuals)
+    res = residuals.copy() if isinstance(residuals, ColumnRows) else list(residuals)
     orig = list(origins)
     # the residuals and variables stacked once (a vertcat converts each scalar from
     # Python); the caller may pass them already stacked
