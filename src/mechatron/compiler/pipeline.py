@@ -34,7 +34,10 @@ def compile_model(model: Component, *, name: str | None = None,
 
     The cyclic garbage collector is paused while compiling: the passes allocate hundreds of
     thousands of short-lived wrappers and no cycles, and full collections over a growing
-    heap would make compile time grow faster than the model.
+    heap would make compile time grow faster than the model. No cycles is a rule the
+    passes keep (tests/compiler/test_pipeline.py): what a compile drops is freed by
+    reference counts as it goes, while a cycle would hold its memory to the end and
+    leave the collector's first pass after the compile to visit all of it.
     """
     enabled = gc.isenabled()
     gc.disable()
