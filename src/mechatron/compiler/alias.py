@@ -15,7 +15,7 @@ substituted in one CasADi call and kept stacked for the passes after this one.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from itertools import repeat
 from operator import attrgetter
@@ -37,7 +37,7 @@ class AliasResult:
     """What alias elimination leaves: the remaining equations (as parallel lists and
     stacked in one column), the remaining variables, and how to recover the others."""
 
-    residuals: list[ca.SX]                            # remaining residuals, in order
+    residuals: Sequence[ca.SX]      # remaining residuals, in order (a ColumnRows)
     origins: list                                     # origin of each
     owners: list[str]                                 # owner of each
     unknowns: list[str]                               # remaining variable names

@@ -99,7 +99,8 @@ class _Singular(StructuralError):
 
 
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
-          syms: dict[str, ca.SX] | list[ca.SX], derivative: dict[str, ca.SX], time: ca.SX,
+          syms: dict[str, ca.SX] | list[ca.SX] | ColumnRows,
+          derivative: dict[str, ca.SX], time: ca.SX,
           start_guess, hints: dict[str, str],
           preference: dict[str, float] | None = None,
           declared: dict[str, int] | None = None,
@@ -183,12 +184,18 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
                               path=exc.path) from None
 
 
+def _own(items) -> list | ColumnRows:
+    """A copy of ``items`` that `_lower` may change: a `ColumnRows` stays one (its rows
+    not formed), anything else becomes a list."""
+    return items.copy() if isinstance(items, ColumnRows) else list(items)
+
+
 def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_guess, hints,
            preference, declared, roles, classes, physical, parameters,
            stacked=None, others=None) -> Lowered:
     # -- variables of the structural problem: unknowns and their derivatives -------------
-    var_syms: list[ca.SX] = syms.copy() if isinstance(syms, ColumnRows) else \
-        list(syms) if isinstance(syms, list) else [syms[n] for n in unknowns]
+    var_syms: list[ca.SX] = _own(syms) if isinstance(syms, (list, ColumnRows)) else \
+        [syms[n] for n in unknowns]
     var_names: list[str] = list(unknowns)
     var_to_diff = [-1] * len(var_syms)
     for i, n in enumerate(unknowns):
@@ -198,7 +205,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             var_syms.append(d)
             var_names.append(f"der({n})")
             var_to_diff.append(-1)
-    res = residuals.copy() if isinstance(residuals, ColumnRows) else list(residuals)
+    res = _own(residuals)
     orig = list(origins)
     # the residuals and variables stacked once (a vertcat converts each scalar from
     # Python); the caller may pass them already stacked
