@@ -176,6 +176,39 @@ def test_template_instances_take_their_variables_by_row():
     assert not [n for n in formed if n.startswith(("r", "c", "l"))]
 
 
+@pytest.mark.parametrize("build", [lambda: ladder(30), nested_model, reading_model])
+def test_rows_and_numbers_kept_by_flattening_are_the_records_integers(build):
+    """The rows and variable numbers that flattening keeps per instance and per equation
+    (a template instance's variable slots, its equations' alias hints and rows) are the
+    integer objects of the variables' records, not one object of their own each; and
+    each hint still names the variables its equation relates."""
+    flat = fl.flatten(build())
+    records = list(flat.variables.values())
+    row_object = {v.row: v.row for v in records if isinstance(v, fl._ColumnVariable)}
+    number = flat.variable_rows()
+    named_by = {number[n]: n for n in flat.variables}    # a hint's number -> the name
+
+    def shared(x) -> bool:
+        return x not in row_object or row_object[x] is x or -5 <= x <= 256   # cached
+
+    numbers = 0
+    for eq in flat.equations:
+        if not isinstance(eq, fl._TemplateEquation):
+            continue
+        assert shared(eq.row)
+        hint = eq.alias
+        if hint[0] in ("pair", "const") and type(hint[1]) is int:
+            numbers += 1
+            held = hint[1:3] if hint[0] == "pair" else hint[1:2]
+            assert all(shared(x) for x in held)
+            named = {named_by[x] for x in held}
+            assert named <= {s.name() for s in ca.symvar(eq.residual)}
+        tpl = eq.template
+        for args in tpl.instances:
+            assert all(shared(a) for a in args if type(a) is int)
+    assert numbers
+
+
 def _same(a, b) -> bool:
     return ca.is_equal(ca.SX(a), ca.SX(b), 0)
 

@@ -455,6 +455,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
         for el in elements:
             el._syms = None
             el._path_cache = None
+    flat.__dict__.pop("_ints", None)     # its integers live on where they are held
     if problems:
         raise problems.error_class()(_summary(name, problems), problems=list(problems),
                                      path=name)
@@ -611,11 +612,18 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     # for a parameter passed on unchanged (R=R) its parent's; -1 for an expression
     par_rows = flat.__dict__["_parameter_rows"] = {}
     var_column = _symbols(var_names, split=False)[0]
+    # the integers 0 .. n-1 as objects, once: the records' rows, and every row or
+    # number that flattening keeps later (an element's first row, a template instance's
+    # variable rows, alias hints, equation rows) refers to these instead of holding an
+    # integer object of its own (32 bytes each; see `_Template.add`)
+    ints = list(range(len(var_names)))
     records = [_ColumnVariable(path, var_column, row, unit, doc, kind, owner, start,
                                priority, hint, select)
                for row, path, (_, kind, unit, doc, start, priority, hint, select), owner
-               in zip(range(len(var_names)), var_names, var_plain, var_owner)]
+               in zip(ints, var_names, var_plain, var_owner)]
     base = len(variables)            # variables bound before (none in flatten)
+    if not base:
+        flat.__dict__["_ints"] = ints
     variables.update(zip(var_names, records))
     pi = vi = 0
     for el, params, plain, offsets in bound:
@@ -655,8 +663,8 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         else:
             syms = {}
         if plain:
-            syms.column, syms.base, syms.offsets = var_column, vi, offsets
-            syms.row = base + vi if base else vi     # one int object, not two
+            syms.column, syms.base, syms.offsets = var_column, ints[vi], offsets
+            syms.row = base + vi if base else syms.base
             starts = el._starts
             if starts:
                 for j, (key, _, unit, *_) in enumerate(plain):
@@ -1142,7 +1150,7 @@ class _Template:
                  "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
                  "row_hints", "row_bases", "column", "var_column", "model_name",
-                 "slots", "slot_keys", "der_rows", "der_column")
+                 "slots", "slot_keys", "der_rows", "der_column", "row_span")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=(), model_name=""):
@@ -1209,6 +1217,8 @@ class _Template:
                               if p[0] == "pair" else ("const", *var_rows[p[1]], p[2])
                               for p in self.aliases]
             self.row_bases = sorted({var_rows[i][0] for i in read})    # bases read
+            # the largest row after its base a hint reads
+            self.row_span = max(var_rows[i][1] for i in read) if read else 0
 
     def add(self, flat: FlatModel, el, ders=None) -> None:
         """Add the instance ``el``; ``ders`` holds derivative symbols made beforehand
@@ -1230,7 +1240,11 @@ class _Template:
             # their column (`symbols` forms the symbols if a message needs them;
             # `instantiate` takes them from the model's column by the rows in `bases`)
             base = [s.base for s in own]
-            args = [base[w] + x if is_var else own[w][x] for is_var, w, x in self.slots]
+            ints = state.get("_ints", ())
+            if len(ints) != column.numel():      # not the rows of this column
+                ints = range(column.numel())
+            args = [ints[base[w] + x] if is_var else own[w][x]
+                    for is_var, w, x in self.slots]
             self.var_column = column
         else:
             args = [own[w][k] for w, k in self.slot_keys]
@@ -1265,9 +1279,15 @@ class _Template:
         base = bases[-1 - len(self.ports):]
         if self.row_hints is not None and all(base[w] >= 0 for w in self.row_bases):
             # by variable number (its row in the model's variables), see `_Template`
+            # the numbers are the shared integers of `_bind_symbols` where it made them
+            ints = state.get("_ints", ())
+            top = max((base[w] for w in self.row_bases), default=0) + self.row_span
+            if top >= len(ints):                  # a row past them: a port bound late
+                ints = range(top + 1)
             hints = [h if h[0] == "none" else
-                     ("pair", base[h[1]] + h[2], base[h[3]] + h[4], h[5]) if h[0] == "pair"
-                     else ("const", base[h[1]] + h[2], h[3]) for h in self.row_hints]
+                     ("pair", ints[base[h[1]] + h[2]], ints[base[h[3]] + h[4]], h[5])
+                     if h[0] == "pair" else ("const", ints[base[h[1]] + h[2]], h[3])
+                     for h in self.row_hints]
         elif owner:
             hints = [h if h[0] == "none" else
                      ("pair", owner + h[1], owner + h[2], h[3]) if h[0] == "pair"
@@ -1275,8 +1295,11 @@ class _Template:
         else:
             hints = self.root_hints
         first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
-        flat.equations += [_TemplateEquation(self, owner, hint, first + k)
-                           for k, hint in enumerate(hints)]
+        ints = state.get("_ints", ())
+        rows = ints[first:first + len(hints)] if first + len(hints) <= len(ints) else \
+            range(first, first + len(hints))
+        flat.equations += [_TemplateEquation(self, owner, hint, row)
+                           for row, hint in zip(rows, hints)]
 
     def instantiate(self, flat: FlatModel) -> None:
         """Every instance's residuals from one call of the mapped function."""
