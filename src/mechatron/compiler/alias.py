@@ -187,6 +187,9 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         old, new = _replacements(flat, names, index, gone, result) if kept else (None, None)
         if old is not None:
             stacked = ca.substitute(stacked, old, new)
+    # the union-find is done: the numbering lives on in `result.eliminated` (read with
+    # `get` alone), its forest and factors (a number and a float per variable) do not
+    index.parent = index.factor = None
     if kept:
         result.residuals = ColumnRows(stacked)     # each formed when read
         result.stacked = stacked

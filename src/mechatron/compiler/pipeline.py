@@ -185,8 +185,9 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # (the scalars stacked apart: CasADi's vertcat of a column and 10^5 scalars costs
     # half as much again as the two steps)
     # each unknown's row among the model's variables (none without variables)
-    order = alias.unknown_index.tolist() if alias.unknown_index is not None else []
-    unknown_col = flat.stack_rows(order)
+    unknown_rows = alias.unknown_index if alias.unknown_index is not None else \
+        np.zeros(0, dtype=np.intp)
+    unknown_col = flat.stack_rows(unknown_rows.tolist())
     stacked = (res_vec, ca.vertcat(unknown_col, ca.vertcat(*der_syms))) \
         if residuals and not relations else None
     residuals = scanned
@@ -212,13 +213,15 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         return out
 
     # the hints are read only by messages; the declaration order of the unknowns only
+    # by state selection, when index reduction differentiated something
     hints = _OnDemand(lambda: {n: v.hint for n, v in variables.items() if v.hint})
     low = lower(flat.name, residuals, origins, alias.unknowns, syms,
                 {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
-                declared=dict(zip(alias.unknowns, order)),
+                declared=_OnDemand(lambda: dict(zip(alias.unknowns,
+                                                    unknown_rows.tolist()))),
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
-                classes=dict(flat.components), physical=flat.physical_owners,
+                classes=flat.components, physical=flat.physical_owners,
                 parameters=p_syms, stacked=stacked,
                 others=ca.vertcat(p, ctx.time))
     lap("structure")
