@@ -354,3 +354,75 @@ def test_derivatives_made_before_their_instance_give_the_same_residuals(watched,
         if k in watched:
             np.testing.assert_allclose(res[f"w{k}.rate"], 2.0 / tau * np.exp(-res.t / tau),
                                        rtol=1e-3, atol=1e-2)
+
+
+def _origins_both(build, monkeypatch):
+    """Alias elimination's origins of ``build()``: as an `Origins`, and as the list of
+    each kept equation's own origin (what it was before, the reference)."""
+    import mechatron.compiler.alias as alias_pass
+    lazy = eliminate_aliases(fl.flatten(build())).origins
+    monkeypatch.setattr(alias_pass, "Origins", lambda kept: [eq.origin for eq in kept])
+    plain = eliminate_aliases(fl.flatten(build())).origins
+    monkeypatch.undo()
+    return lazy, plain
+
+
+def _same_origin(a, b) -> bool:
+    """The same origin read off two flattenings of one model."""
+    return (type(a) is type(b) and str(a) == str(b)
+            and getattr(a, "where", None) == getattr(b, "where", None)
+            and (getattr(a, "template", None) is None) ==
+            (getattr(b, "template", None) is None))
+
+
+def backlash_chain():
+    """Inertias coupled through backlash elements: a class template whose equations hold
+    a relation (the contact law's if_else), used three times."""
+    m = mt.System("backlash_chain")
+    ref = m.add("ref", rot.RotationalReference())
+    src = m.add("src", rot.ConstantTorque(T=1.0))
+    m.connect(ref.port, src.B)
+    prev = src.A
+    for k in range(3):
+        gap = m.add(f"b{k}", rot.ElastoBacklash(c=1e3, d=1.0, b=0.01))
+        body = m.add(f"j{k}", rot.Inertia(J=0.1))
+        m.connect(prev, gap.A)
+        m.connect(gap.B, body.port)
+        prev = body.port
+    return m
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(5), drive, stop_and_springs,
+                                   backlash_chain])
+def test_origins_are_formed_when_read_and_read_as_the_equations_own(build, monkeypatch):
+    """`Origins` holds a template equation's origin as two numbers and forms it when
+    read: read, replaced, appended, inserted, deleted and copied, it reads as the list
+    of the kept equations' own origins does; and the residuals that the relation scan
+    picks are the same either way."""
+    from mechatron.compiler.relations import _candidates
+    lazy, plain = _origins_both(build, monkeypatch)
+    assert isinstance(lazy, fl.Origins) and len(lazy) == len(plain)
+    held = int((lazy.which >= 0).sum())      # held as numbers: those not read before
+    assert held or build is stop_and_springs
+    assert all(_same_origin(a, b) for a, b in zip(lazy, plain))
+    assert all(_same_origin(lazy[k], plain[k]) for k in (-1, -len(plain), len(plain) // 2))
+    assert [str(o) for o in lazy[1:4]] == [str(o) for o in plain[1:4]]
+    scanned = _candidates(lazy)
+    assert scanned == _candidates(list(lazy)) == _candidates(plain)
+    if build is backlash_chain:      # the rows of the template with a relation
+        assert any(lazy.which[k] >= 0 for k in scanned)
+    with pytest.raises(IndexError):
+        lazy[len(plain)]
+    # changed as a list: the copy changes, the original does not
+    mine, ref = lazy.copy(), list(plain)
+    for seq in (mine, ref):
+        seq[2] = "replaced"
+        seq.append("appended")
+        seq[-1] = "appended again"
+    assert [str(o) for o in mine] == [str(o) for o in ref]
+    assert len(lazy) == len(plain) and str(lazy[2]) == str(plain[2])
+    assert _candidates(mine) == _candidates(ref)
+    for seq in (mine, ref):
+        seq.insert(1, "inserted")
+        del seq[3]
+    assert [str(o) for o in mine] == [str(o) for o in ref]

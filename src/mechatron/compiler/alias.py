@@ -23,7 +23,8 @@ from operator import attrgetter
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.flatten import ColumnRows, FlatEquation, FlatModel, stack_residuals
+from mechatron.compiler.flatten import (ColumnRows, FlatEquation, FlatModel, Origins,
+                                       stack_residuals)
 from mechatron.errors import InitializationError
 
 __all__ = ["AliasResult", "eliminate_aliases"]
@@ -38,7 +39,7 @@ class AliasResult:
     stacked in one column), the remaining variables, and how to recover the others."""
 
     residuals: Sequence[ca.SX]      # remaining residuals, in order (a ColumnRows)
-    origins: list                                     # origin of each
+    origins: Sequence                                 # origin of each (Origins)
     owners: list[str]                                 # owner of each
     unknowns: list[str]                               # remaining variable names
     eliminated: Mapping[str, tuple[str | None, float]] = field(default_factory=dict)
@@ -176,7 +177,7 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             if fix(a if type(a) is int else index[a], hint[2]):
                 continue
         keep(eq)
-    origins = list(map(_ORIGIN, kept))
+    origins = Origins(kept)                 # each formed when read (messages)
     owners = list(map(_OWNER, kept))
     n_before = len(flat.equations) + len(flat.aliases)
     # the kept residuals stacked: a class template's rows gathered from its column
@@ -245,7 +246,7 @@ class _Eliminated(Mapping):
         return repr(self._dict())
 
 
-_ORIGIN, _OWNER = attrgetter("origin"), attrgetter("owner")
+_OWNER = attrgetter("owner")
 
 
 class _Numbers:

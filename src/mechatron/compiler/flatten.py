@@ -26,7 +26,7 @@ from mechatron.core.events import EventAction
 from mechatron.errors import ConnectError, ModelError, ParameterError, UnitError
 from mechatron.units import dimensionality, to_si, ureg
 
-__all__ = ["FlatModel", "FlatVariable", "FlatParameter", "FlatEquation", "flatten"]
+__all__ = ["FlatModel", "FlatVariable", "FlatParameter", "FlatEquation", "Origins", "flatten"]
 
 
 @dataclass(slots=True)
@@ -263,6 +263,106 @@ class _TemplateEquation(FlatEquation):
     @residual.setter
     def residual(self, value):
         _RESIDUAL_SLOT.__set__(self, value)
+
+
+class Origins(MutableSequence):
+    """The origin of each of a list of equations, as a list whose items are formed when
+    read: a class template's equation (`_TemplateEquation`) is held as two numbers,
+    its template's and its row, and its origin (`_TemplateOrigin`) formed on each read;
+    any other origin is held as given. Only messages read origins, a few of a million;
+    `templates` and `which` tell which rows come from which template without forming
+    any (`mechatron.compiler.relations`). Items may be replaced and appended as in a
+    list; `copy` shares the numbers."""
+
+    __slots__ = ("templates", "which", "rows", "given", "_extra", "formed")
+
+    def __init__(self, eqs=()):
+        templates: list = []
+        number: dict = {}               # id(template) -> its place in templates
+        which, rows, given = [], [], {}
+        for k, eq in enumerate(eqs):
+            if type(eq) is _TemplateEquation and _ORIGIN_SLOT.__get__(eq) is None:
+                tpl = eq.template
+                t = number.get(id(tpl))
+                if t is None:
+                    t = number[id(tpl)] = len(templates)
+                    templates.append(tpl)
+                which.append(t)
+                rows.append(eq.row)
+            else:
+                which.append(-1)
+                rows.append(0)
+                given[k] = eq.origin
+        self.templates = templates
+        #: each row's template (its place in `templates`), -1 for an origin held as given
+        self.which = np.array(which, dtype=np.int32)
+        self.rows = np.array(rows, dtype=np.int64)     # its row in the template's column
+        self.given = given              # row -> origin, for rows held or replaced
+        self._extra: list = []          # appended after the rows
+        self.formed: list | None = None     # all, after a deletion or an insertion
+
+    def __len__(self) -> int:
+        if self.formed is not None:
+            return len(self.formed)
+        return len(self.which) + len(self._extra)
+
+    def __getitem__(self, k):
+        if self.formed is not None:
+            return self.formed[k]
+        if isinstance(k, slice):
+            return [self[i] for i in range(*k.indices(len(self)))]
+        n = len(self.which)
+        if k < 0:
+            k += len(self)
+        if k >= n:
+            return self._extra[k - n]
+        if k < 0:
+            raise IndexError("origin index out of range")
+        origin = self.given.get(k)
+        if origin is None:
+            tpl = self.templates[self.which[k]]
+            instance, j = divmod(int(self.rows[k]), tpl.n_eq)
+            origin = _TemplateOrigin(tpl.paths[instance] or tpl.model_name, tpl,
+                                     tpl.instances[instance], j)
+        return origin
+
+    def __setitem__(self, k, value) -> None:
+        if self.formed is None and isinstance(k, slice):
+            self._form_all()
+        if self.formed is not None:
+            self.formed[k] = value
+            return
+        n = len(self.which)
+        if k < 0:
+            k += len(self)
+        if k >= n:
+            self._extra[k - n] = value
+        elif k < 0:
+            raise IndexError("origin assignment index out of range")
+        else:
+            self.given[k] = value
+
+    def _form_all(self) -> None:
+        if self.formed is None:
+            self.formed = [self[k] for k in range(len(self))]
+
+    def __delitem__(self, k) -> None:
+        self._form_all()          # the rows after it move against the numbers
+        del self.formed[k]
+
+    def insert(self, i: int, value) -> None:
+        if self.formed is None and i >= len(self):
+            self._extra.append(value)
+            return
+        self._form_all()
+        self.formed.insert(i, value)
+
+    def copy(self) -> Origins:
+        out = Origins()
+        out.templates, out.which, out.rows = self.templates, self.which, self.rows
+        out.given, out._extra = dict(self.given), list(self._extra)
+        out.formed = None if self.formed is None else list(self.formed)
+        return out
 
 
 def stack_residuals(eqs) -> ca.SX:

@@ -16,6 +16,9 @@ from dataclasses import dataclass
 from itertools import repeat
 
 import casadi as ca
+import numpy as np
+
+from mechatron.compiler.flatten import Origins
 
 try:      # CasADi's own entry point, without the Python wrapper: once per instruction
     from casadi._casadi import Function_instruction_id as _OP_OF
@@ -97,26 +100,35 @@ def extract_relations(residuals: list[ca.SX], owners: list[str],
     return out, relations
 
 
-def _candidates(origins: list) -> list[int] | None:
+def _candidates(origins) -> list[int] | None:
     """The residuals that may hold relations: all but those of class templates without
-    any (read once per template); None if that cannot be told."""
+    any (read once per template); None if that cannot be told. An `Origins` tells each
+    row's template by number, without forming the origins."""
     free: dict[int, bool] = {}          # template -> holds no relation
-    rows = []
-    for k, origin in enumerate(origins):
-        template = getattr(origin, "template", None)
+
+    def holds_none(template) -> bool:
         fun = getattr(template, "fun", None)
         if not isinstance(fun, ca.Function):
-            rows.append(k)
-            continue
+            return False
         key = id(template)
         none = free.get(key)
         if none is None:
             m = fun.n_instructions()
             none = free[key] = _REL_OPS.keys().isdisjoint(map(_OP_OF, repeat(fun, m),
                                                                range(m)))
-        if not none:
-            rows.append(k)
-    return rows
+        return none
+
+    if isinstance(origins, Origins) and origins.formed is None:
+        # the rows of the templates that may hold one, and every row held as given
+        # (read one by one, as below), in order
+        scan = np.array([not holds_none(t) for t in origins.templates] + [True])
+        maybe = scan[origins.which]            # which == -1: the last entry, True
+        for k, origin in origins.given.items():
+            maybe[k] = not holds_none(getattr(origin, "template", None))
+        n = len(origins.which)
+        return np.flatnonzero(maybe).tolist() + list(range(n, len(origins)))
+    return [k for k, origin in enumerate(origins)
+            if not holds_none(getattr(origin, "template", None))]
 
 
 def _placeholder(relations: list[Relation], op: str, d: ca.SX, owner: str,

@@ -17,7 +17,7 @@ from itertools import chain
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.flatten import ColumnRows
+from mechatron.compiler.flatten import ColumnRows, Origins
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
 from mechatron.compiler.linear import (Combined, jacobian_apart, owner_of, reveal,
@@ -184,10 +184,10 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
                               path=exc.path) from None
 
 
-def _own(items) -> list | ColumnRows:
-    """A copy of ``items`` that `_lower` may change: a `ColumnRows` stays one (its rows
-    not formed), anything else becomes a list."""
-    return items.copy() if isinstance(items, ColumnRows) else list(items)
+def _own(items) -> list | ColumnRows | Origins:
+    """A copy of ``items`` that `_lower` may change: a `ColumnRows` or `Origins` stays
+    one (its items not formed), anything else becomes a list."""
+    return items.copy() if isinstance(items, (ColumnRows, Origins)) else list(items)
 
 
 def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_guess, hints,
@@ -206,7 +206,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             var_names.append(f"der({n})")
             var_to_diff.append(-1)
     res = _own(residuals)
-    orig = list(origins)
+    orig = _own(origins)
     # the residuals and variables stacked once (a vertcat converts each scalar from
     # Python); the caller may pass them already stacked
     if res:
