@@ -209,6 +209,30 @@ def test_rows_and_numbers_kept_by_flattening_are_the_records_integers(build):
     assert numbers
 
 
+@pytest.mark.parametrize("build", [lambda: ladder(4), nested_model, reading_model])
+def test_parameters_are_read_from_their_column(build):
+    """A parameter bound in bulk holds its row in the column of all parameters: its
+    symbol, read alone, is that row, named by its path; the stacked parameters are that
+    column gathered in order; and the equations of class templates took their parameters
+    by row, forming none alone."""
+    flat = fl.flatten(build())
+    params = list(flat.parameters.values())
+    assert params and all(isinstance(q, fl._ColumnParameter) for q in params)
+    unformed = [q for q in params if fl._PAR_SYM_SLOT.__get__(q) is None]
+    stacked = flat.parameter_column()
+    assert stacked.shape == (len(params), 1)
+    assert [s.name() for s in ca.vertsplit(stacked)] == [q.name for q in params]
+    assert all(ca.is_equal(stacked[k], q.sym) for k, q in enumerate(params))
+    assert all(ca.is_equal(q.sym, q.column[q.row]) for q in unformed)
+    if build is not nested_model and build is not reading_model:   # all from templates
+        assert len(unformed) == len(params)
+        # each instance holds its parameters' rows, not symbols formed alone
+        templates = {eq.template for eq in flat.equations
+                     if isinstance(eq, fl._TemplateEquation)}
+        held = [args[:len(tpl.par_slots)] for tpl in templates for args in tpl.instances]
+        assert any(held) and all(type(a) is int for slots in held for a in slots)
+
+
 def _same(a, b) -> bool:
     return ca.is_equal(ca.SX(a), ca.SX(b), 0)
 

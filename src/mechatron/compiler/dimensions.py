@@ -375,7 +375,6 @@ class _Symbols:
         self.dims = dims
         # the variables' column is stacked once per model (shared with other passes)
         self.vector = flat.stack_variables()
-        self._parameters: dict | None = None
 
     def _dim(self, unit: str):
         d = unit_dimension(unit)
@@ -395,9 +394,7 @@ class _Symbols:
         ctx = flat.context
         if name == ctx.time.name():
             return SECOND
-        if self._parameters is None:
-            self._parameters = {p.sym.name(): p for p in flat.parameters.values()}
-        p = self._parameters.get(name)
+        p = flat.parameters.get(name)      # a parameter's symbol is named by its path
         if p is not None:
             d = self._dim(p.unit)
             # a model's external input of unit "1": a free signal

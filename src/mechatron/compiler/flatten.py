@@ -101,6 +101,35 @@ class _ColumnVariable(FlatVariable):
         _SYM_SLOT.__set__(self, value)
 
 
+_PAR_SYM_SLOT = FlatParameter.__dict__["sym"]
+
+
+class _ColumnParameter(FlatParameter):
+    """A parameter bound in bulk (`_bind_symbols`): its symbol is the row ``row`` of the
+    column of all parameters' symbols, formed as a Python object only when read (the
+    compiler takes the column, `FlatModel.parameter_column`)."""
+
+    __slots__ = ("column", "row")
+
+    def __init__(self, name, column, row, value, unit, doc, owner, bounds=(None, None)):
+        _PAR_SYM_SLOT.__set__(self, None)
+        self.name, self.column, self.row, self.value = name, column, row, value
+        self.unit, self.doc, self.owner, self.bounds = unit, doc, owner, bounds
+        self.is_input = False
+
+    @property
+    def sym(self):
+        s = _PAR_SYM_SLOT.__get__(self)
+        if s is None:
+            s = self.column[self.row]
+            _PAR_SYM_SLOT.__set__(self, s)
+        return s
+
+    @sym.setter
+    def sym(self, value):
+        _PAR_SYM_SLOT.__set__(self, value)
+
+
 class ColumnRows(MutableSequence):
     """The scalars of an SX column as a list whose items become Python objects when
     read, not all at once. A model of 10^5 components has a million residuals and
@@ -468,6 +497,14 @@ class FlatModel:
             cache = self.__dict__["_variable_stack"] = (len(index), column, index)
         return cache[1], cache[2]
 
+    def parameter_column(self) -> ca.SX:
+        """The symbols of `parameters` stacked, in their order: those bound in bulk
+        (`_ColumnParameter`) gathered from the column of all parameters by one index."""
+        params = self.parameters.values()
+        return _gather((q.column, q.row)
+                       if type(q) is _ColumnParameter and _PAR_SYM_SLOT.__get__(q) is None
+                       else (None, q.sym) for q in params) if params else ca.SX(0, 1)
+
     @functools.cached_property
     def physical_owners(self) -> frozenset:
         """Paths of the components that have physical (conserving) ports."""
@@ -644,25 +681,39 @@ def _gathered(records) -> ca.SX:
 
 
 class _ColumnSyms(dict):
-    """The symbols of an element bound in bulk (its ``_syms``): its parameters' as
-    bound, its variables' read from the column of all variables on first read
-    (``offsets``: each variable's row after ``base``). A class template's instance never
+    """The symbols of an element bound in bulk (its ``_syms``), each read from a column
+    on first read: its variables' from the column of all variables (``offsets``: each
+    variable's row after ``base``), its parameters' from the column of all parameters
+    (``par_rows``: each one's row, in declaration order; a parameter bound to an
+    expression of its parent's is held as bound). A class template's instance never
     reads them one by one (`_Template.add` takes their rows). ``row`` is the row of its
     first variable among the model's variables (`_first_row`)."""
 
-    __slots__ = ("column", "base", "offsets", "row")
+    __slots__ = ("column", "base", "offsets", "row", "par_column", "par_rows",
+                 "par_places")
 
     def __missing__(self, key):
-        sym = self[key] = self.column[self.base + self.offsets[key]]
+        at = self.offsets.get(key)
+        if at is not None:
+            sym = self.column[self.base + at]
+        else:       # a parameter (KeyError for a key that is neither)
+            sym = self.par_column[self.par_rows[self.par_places[key]]]
+        self[key] = sym
         return sym
 
     def filled(self) -> "_ColumnSyms":
         """Every symbol read, in declaration order (parameters, then variables)."""
-        offsets = self.offsets
-        if any(not dict.__contains__(self, k) for k in offsets):
-            given = [(k, v) for k, v in self.items() if k not in offsets]
-            syms = ca.vertsplit(self.column[self.base:self.base + len(offsets)])
+        offsets, places = self.offsets, self.par_places
+        if any(not dict.__contains__(self, k) for k in offsets) or \
+                any(not dict.__contains__(self, k) for k in places):
+            params = [(k, self[k]) for k in places]
+            given = [(k, v) for k, v in self.items() if k not in offsets and k not in places]
+            if any(not dict.__contains__(self, k) for k in offsets):
+                syms = ca.vertsplit(self.column[self.base:self.base + len(offsets)])
+            else:
+                syms = [dict.__getitem__(self, k) for k in offsets]
             self.clear()
+            self.update(params)
             self.update(given)
             self.update(zip(offsets, syms))
         return self
@@ -706,7 +757,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             var_plain.extend(plain)
             var_owner.extend([owner._path_cache if owner is not None else ""] * len(plain))
         bound.append((el, params, plain, offsets))
-    par_column, par_syms = _symbols(par_names)
+    par_column = _symbols(par_names, split=False)[0]
     flat.__dict__["_parameter_column"] = par_column
     # id -> the row of each parameter in the column, in declaration order: its own, or
     # for a parameter passed on unchanged (R=R) its parent's; -1 for an expression
@@ -733,16 +784,20 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner._path_cache if owner is not None else ""
             el_rows = par_rows[id(el)] = list(range(pi, pi + len(params)))
+            if plain:       # each parameter's symbol read from the column on first read
+                syms.par_column, syms.par_rows = par_column, el_rows
+                syms.par_places = _parameter_places(type(el))
             for j, (key, decl) in enumerate(params):
                 path = par_names[pi]
-                sym = par_syms[pi]
+                row = el_rows[j]
                 pi += 1
                 raw = el._values.get(key, decl.default)
                 if isinstance(raw, ParameterExpression):
                     syms[key], own_values[key], el_rows[j] = _bind_expression(
                         flat, el, key, decl, raw, values, problems, par_rows)
                     continue
-                syms[key] = sym
+                if not plain:
+                    syms[key] = par_column[row]
                 value = float("nan")
                 if raw is None:
                     problems.add(ParameterError,
@@ -756,10 +811,12 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                     else:
                         _check_range(el, key, decl, value, problems)
                 own_values[key] = value
-                parameters[path] = FlatParameter(path, sym, value, decl.unit, decl.doc,
-                                                 owner_path, (decl.min, decl.max))
+                parameters[path] = _ColumnParameter(path, par_column, row, value, decl.unit,
+                                                    decl.doc, owner_path,
+                                                    (decl.min, decl.max))
         elif plain:
             syms = _ColumnSyms()
+            syms.par_column, syms.par_rows, syms.par_places = None, (), _NO_PLACES
         else:
             syms = {}
         if plain:
@@ -970,6 +1027,16 @@ def _declaration_plan(cls):
         plain.append((key, kind, decl.unit, decl.doc, decl.start, decl.priority, hint,
                       getattr(decl, "state_select", "default")))
     return tuple(params), tuple(plain)
+
+
+_NO_PLACES: dict = {}
+
+
+@functools.lru_cache(maxsize=None)
+def _parameter_places(cls) -> dict:
+    """Each parameter key of ``cls`` -> its place among the class's parameters."""
+    keys = _binding_plan(cls)[2]
+    return dict(zip(keys, range(len(keys))))
 
 
 @functools.lru_cache(maxsize=None)
@@ -1250,7 +1317,7 @@ class _Template:
                  "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
                  "row_hints", "row_bases", "column", "var_column", "model_name",
-                 "slots", "slot_keys", "der_rows", "der_column", "row_span")
+                 "slots", "slot_keys", "der_rows", "der_column", "row_span", "par_column")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=(), model_name=""):
@@ -1291,6 +1358,8 @@ class _Template:
         #: the parameter slots, each the same row after the element's first parameter
         self.par_slots = par_slots
         self.par_bases: list = []   # each instance's parameter rows (-1: not known)
+        #: the column of the parameters that instances' parameter rows refer to
+        self.par_column: ca.SX | None = None
         #: each instance's derivatives by their rows in `der_column` (made in bulk, see
         #: `_template_derivatives`), -1 for a derivative made otherwise
         self.der_rows: list = []
@@ -1343,8 +1412,16 @@ class _Template:
             ints = state.get("_ints", ())
             if len(ints) != column.numel():      # not the rows of this column
                 ints = range(column.numel())
-            args = [ints[base[w] + x] if is_var else own[w][x]
-                    for is_var, w, x in self.slots]
+            # and each parameter slot laid out as bound (`par_slots`, the first ones)
+            # the parameter's row in the column of the parameters, if it has one
+            prows = state.get("_parameter_rows", {}).get(id(el)) if self.par_slots \
+                else None
+            k = len(self.par_slots) if prows is not None else 0
+            args = [ints[base[w] + x] if is_var else
+                    prows[i] if i < k and prows[i] >= 0 else own[w][x]
+                    for i, (is_var, w, x) in enumerate(self.slots)]
+            if k:
+                self.par_column = state["_parameter_column"]
             self.var_column = column
         else:
             args = [own[w][k] for w, k in self.slot_keys]
@@ -1415,9 +1492,12 @@ class _Template:
         self.column = ca.vec(out)       # column-major: instance after instance
 
     def symbols(self, args: list) -> list:
-        """An instance's arguments as symbols: a variable slot that holds a row (see
-        `add`) read from the column of the variables."""
-        return [self.var_column[a] if type(a) is int else a for a in args]
+        """An instance's arguments as symbols: a slot that holds a row (see `add`) read
+        from the column of the parameters (the parameter slots, first) or of the
+        variables."""
+        k = len(self.par_slots)
+        return [a if type(a) is not int else self.par_column[a] if i < k
+                else self.var_column[a] for i, a in enumerate(args)]
 
     def _columns(self, flat: FlatModel, n: int, width: int):
         """The instances' arguments as a ``width`` x ``n`` matrix; the variable slots are
@@ -1462,7 +1542,8 @@ class _Template:
             stacked = ca.vertcat(*parts)
             order = slots + par_slots + ders + [width - 1]
         else:
-            rest = ca.vertcat(*[args[i] for args in self.instances for i in others])
+            every = [self.symbols(args) for args in self.instances]
+            rest = ca.vertcat(*[args[i] for args in every for i in others])
             stacked = ca.vertcat(var_part, ca.reshape(rest, len(others), n))
             order = slots + others          # row r of stacked holds slot order[r]
         position = [0] * width

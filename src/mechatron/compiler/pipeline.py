@@ -171,8 +171,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
 
     ctx = flat.context
     params = list(flat.parameters.values())
-    p_syms = [p.sym for p in params]
-    p = ca.vertcat(*p_syms) if p_syms else ca.SX(0, 1)
+    p = flat.parameter_column()     # the symbols formed alone only where read alone
     der_syms = [ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative]
     residuals, origins, owners = alias.residuals, alias.origins, alias.owners
     # stacked once (by alias elimination) for the relation scan and the structural
@@ -198,7 +197,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # in the order of the unknowns, split off their column (a variable's symbol is
     # formed as a Python object only when read: see flatten._ColumnVariable)
     syms = ColumnRows(unknown_col) if alias.unknowns else []
-    p_value = _OnDemand(lambda: {q.sym.name(): q.value for q in params})
+    p_value = _OnDemand(lambda: {q.name: q.value for q in params})   # named by path
 
     def start_guess(free):
         """Start values of symbols named by path: an unknown's (see `_guess`), a
@@ -222,7 +221,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                                                     unknown_rows.tolist()))),
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
                 classes=flat.components, physical=flat.physical_owners,
-                parameters=p_syms, stacked=stacked,
+                parameters=ColumnRows(p) if params else [], stacked=stacked,
                 others=ca.vertcat(p, ctx.time))
     lap("structure")
 
