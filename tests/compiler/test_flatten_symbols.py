@@ -172,7 +172,7 @@ def test_template_instances_take_their_variables_by_row():
     assert held
     # the variables of the template instances were taken by row, never formed alone
     formed = [n for n, v in flat.variables.items()
-              if isinstance(v, fl._ColumnVariable) and fl._SYM_SLOT.__get__(v) is not None]
+              if isinstance(v, fl._ColumnVariable) and v._sym is not None]
     assert not [n for n in formed if n.startswith(("r", "c", "l"))]
 
 
