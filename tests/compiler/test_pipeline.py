@@ -42,3 +42,42 @@ def test_a_compile_leaves_no_reference_cycles(name):
         if enabled:
             gc.enable()
     assert found == 0, f"{found} objects in cycles, e.g. {kinds.most_common(6)}"
+
+
+def pair_chain(n: int = 15):
+    """A chain of ``n`` reused two-stage RC subsystems (their ports folded)."""
+    from mechatron.library import electrical as el
+    from tests.compiler.test_hierarchy import Pair
+    m = mt.System("pair_chain")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    g = m.add("g", el.ElectricalReference())
+    m.connect(src.n, g.port)
+    node = src.p
+    for k in range(n):
+        pair = m.add(f"s{k}", Pair(R=1.0 + k, C=1e-3))
+        m.connect(node, pair.p)
+        m.connect(pair.gnd, g.port)
+        node = pair.n
+    return m
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(20), pair_chain])
+def test_a_compile_reads_the_unknowns_and_residuals_off_their_columns(build, monkeypatch):
+    """The residuals and the unknowns' symbols reach the structural analysis as columns
+    (`ColumnRows`), and on a network without loops nothing reads enough of them one by
+    one to form them all: each formed Python scalar costs about 260 bytes, a million of
+    them at 10^5 components. The states' symbols and derivatives are read off their own
+    columns, not from the unknowns' one by one."""
+    import mechatron.compiler.flatten as fl
+    formed = []
+    form_all = fl.ColumnRows._form_all
+
+    def watched(self):
+        if not self._formed:
+            formed.append(len(self._items))
+        form_all(self)
+
+    monkeypatch.setattr(fl.ColumnRows, "_form_all", watched)
+    cm = mt.compile_model(build())
+    assert len(cm.state_names) >= 20
+    assert formed == []

@@ -288,7 +288,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                          argn, ["zero"])
     index = ca.SX.sym("index")
     events = EventLowering(plan, relations, flat, alias, list(low.states),
-                           list(low.state_syms), flat.name, p=p, shadow=shadow, t=t, z=z)
+                           low.state_syms, flat.name, p=p, shadow=shadow, t=t, z=z)
     post = events.transition(f_dist2, index, t, x, modes, counters, tlast, z, p) if nr \
         else X
     f_transition = ca.Function("transition", [index, t, X, z, p], [post, z],

@@ -33,10 +33,10 @@ _MAX_SYMBOLIC_SOLVE = 12   # linear torn blocks up to this size are solved symbo
 @dataclass
 class Lowered:
     states: list[str]
-    state_syms: list[ca.SX]
+    state_syms: list[ca.SX] | ColumnRows
     alg: list[str]
     alg_syms: list[ca.SX]
-    ode: list[ca.SX]
+    ode: list[ca.SX] | ColumnRows
     residuals: list[ca.SX]
     assigned: ca.SX                  # symbols of explicitly solved unknowns, in order
     assigned_expr: ca.SX             # their expressions (earlier ones may appear)
@@ -329,7 +329,9 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             if 1 < len(block.equations) <= _LOOP_CHECK_MAX:
                 _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
                             physical or set())
-    out = Lowered(states=[var_names[v] for v in states], state_syms=[var_syms[v] for v in states],
+    # the states' symbols and derivatives are read off their columns at the end: read
+    # one by one here, they would form every unknown's symbol (see ColumnRows)
+    out = Lowered(states=[var_names[v] for v in states], state_syms=[],
                   alg=[], alg_syms=[], ode=[], residuals=[], assigned=ca.SX(0, 1),
                   assigned_expr=ca.SX(0, 1),
                   differentiated=differentiated, n_blocks=len(blocks),
@@ -402,13 +404,13 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             [bulk_solved[k] if k >= 0 else n_x - 1 - k for k in order]]
         out.assigned_expr = ca.vertcat(*bulk_sols, *exprs)[
             [k if k >= 0 else n_bulk - 1 - k for k in order]]
-    for v in states:
-        out.ode.append(var_syms[var_to_diff[v]])
     ders = [var_to_diff[v] for v in states]
     out.state_col, out.ode_col = (
         var_vec[rows] if res and (not rows or max(rows) < var_vec.numel())
         else (ca.vertcat(*[var_syms[v] for v in rows]) if rows else ca.SX(0, 1))
         for rows in (states, ders))
+    # as lists whose scalars are formed when read
+    out.state_syms, out.ode = ColumnRows(out.state_col), ColumnRows(out.ode_col)
     return out
 
 
