@@ -1512,6 +1512,13 @@ class _Template:
         out = self.fun.map(n)(columns) if n > 1 else self.fun(columns)
         self.column = ca.vec(out)       # column-major: instance after instance
 
+    def release(self) -> None:
+        """Let go of what only instantiation and alias elimination read (the residuals
+        of every instance, before alias substitution, and the rows of the instances'
+        elements); what messages read stays (`_TemplateOrigin`)."""
+        self.column = None
+        self.bases = []
+
     def symbols(self, args: list) -> list:
         """An instance's arguments as symbols: a slot that holds a row (see `add`) read
         from the column of the parameters (the parameter slots, first) or of the

@@ -167,6 +167,8 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # origins and owners kept live on in `alias`): let them go now, so that the
     # structural analysis reuses their memory instead of touching fresh pages
     flat.equations = flat.aliases = None
+    for template in getattr(alias.origins, "templates", ()):
+        template.release()      # kept for the origins of messages: not its residuals
     lap("alias")
 
     ctx = flat.context
