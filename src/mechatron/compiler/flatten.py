@@ -99,25 +99,12 @@ class _ColumnVariable:
     def sym(self, value):
         self._sym = value
 
-    @property
-    def kind(self) -> str:
-        return self.plan[1]
-
-    @property
-    def unit(self) -> str:
-        return self.plan[2]
-
-    @property
-    def doc(self) -> str:
-        return self.plan[3]
-
-    @property
-    def hint(self) -> str:
-        return self.plan[6]
-
-    @property
-    def state_select(self) -> str:
-        return self.plan[7]
+    # what the class declares, by its place in the plan entry (`_declaration_plan`)
+    kind = property(lambda self: self.plan[1], doc="variable, across, through, ...")
+    unit = property(lambda self: self.plan[2])
+    doc = property(lambda self: self.plan[3])
+    hint = property(lambda self: self.plan[6], doc="what to try when left unmatched")
+    state_select = property(lambda self: self.plan[7], doc="avoid, default or prefer")
 
     def __repr__(self) -> str:
         return (f"_ColumnVariable({self.name!r}, row={self.row}, unit={self.unit!r}, "
