@@ -223,7 +223,7 @@ def test_parameters_are_read_from_their_column(build):
     assert stacked.shape == (len(params), 1)
     assert [s.name() for s in ca.vertsplit(stacked)] == [q.name for q in params]
     assert all(ca.is_equal(stacked[k], q.sym) for k, q in enumerate(params))
-    assert all(ca.is_equal(q.sym, q.column[q.row]) for q in unformed)
+    assert all(ca.is_equal(q.sym, q.store.column[q.row]) for q in unformed)
     if build is not nested_model and build is not reading_model:   # all from templates
         assert len(unformed) == len(params)
         # each instance holds its parameters' rows, not symbols formed alone

@@ -69,15 +69,23 @@ def test_a_compile_reads_the_unknowns_and_residuals_off_their_columns(build, mon
     them at 10^5 components. The states' symbols and derivatives are read off their own
     columns, not from the unknowns' one by one."""
     import mechatron.compiler.flatten as fl
-    formed = []
-    form_all = fl.ColumnRows._form_all
+    import mechatron.compiler.structure as st
+    handed, formed = [], []         # the lowering's own copies (`_own`), those formed
+    own, form_all = st._own, fl.ColumnRows._form_all
 
-    def watched(self):
-        if not self._formed:
+    def own_watched(items):
+        out = own(items)
+        handed.append(out)
+        return out
+
+    def form_watched(self):
+        if not self._formed and any(self is h for h in handed):
             formed.append(len(self._items))
         form_all(self)
 
-    monkeypatch.setattr(fl.ColumnRows, "_form_all", watched)
+    monkeypatch.setattr(st, "_own", own_watched)
+    monkeypatch.setattr(fl.ColumnRows, "_form_all", form_watched)
     cm = mt.compile_model(build())
     assert len(cm.state_names) >= 20
+    assert sum(isinstance(h, fl.ColumnRows) for h in handed) == 2   # residuals, unknowns
     assert formed == []

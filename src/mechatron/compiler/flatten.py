@@ -116,14 +116,15 @@ _PAR_SYM_SLOT = FlatParameter.__dict__["sym"]
 
 class _ColumnParameter(FlatParameter):
     """A parameter bound in bulk (`_bind_symbols`): its symbol is the row ``row`` of the
-    column of all parameters' symbols, formed as a Python object only when read (the
-    compiler takes the column, `FlatModel.parameter_column`)."""
+    column of all parameters' symbols, formed as a Python object only when read (from
+    ``store``, a `ColumnRows` of that column shared with the elements' symbols); the
+    compiler takes the column (`FlatModel.parameter_column`)."""
 
-    __slots__ = ("column", "row")
+    __slots__ = ("store", "row")
 
-    def __init__(self, name, column, row, value, unit, doc, owner, bounds=(None, None)):
+    def __init__(self, name, store, row, value, unit, doc, owner, bounds=(None, None)):
         _PAR_SYM_SLOT.__set__(self, None)
-        self.name, self.column, self.row, self.value = name, column, row, value
+        self.name, self.store, self.row, self.value = name, store, row, value
         self.unit, self.doc, self.owner, self.bounds = unit, doc, owner, bounds
         self.is_input = False
 
@@ -131,7 +132,7 @@ class _ColumnParameter(FlatParameter):
     def sym(self):
         s = _PAR_SYM_SLOT.__get__(self)
         if s is None:
-            s = self.column[self.row]
+            s = self.store[self.row]
             _PAR_SYM_SLOT.__set__(self, s)
         return s
 
@@ -511,7 +512,7 @@ class FlatModel:
         """The symbols of `parameters` stacked, in their order: those bound in bulk
         (`_ColumnParameter`) gathered from the column of all parameters by one index."""
         params = self.parameters.values()
-        return _gather((q.column, q.row)
+        return _gather((q.store.column, q.row)
                        if type(q) is _ColumnParameter and _PAR_SYM_SLOT.__get__(q) is None
                        else (None, q.sym) for q in params) if params else ca.SX(0, 1)
 
@@ -699,7 +700,7 @@ class _ColumnSyms(dict):
     reads them one by one (`_Template.add` takes their rows). ``row`` is the row of its
     first variable among the model's variables (`_first_row`)."""
 
-    __slots__ = ("column", "base", "offsets", "row", "par_column", "par_rows",
+    __slots__ = ("column", "base", "offsets", "row", "par_store", "par_rows",
                  "par_places")
 
     def __missing__(self, key):
@@ -707,7 +708,7 @@ class _ColumnSyms(dict):
         if at is not None:
             sym = self.column[self.base + at]
         else:       # a parameter (KeyError for a key that is neither)
-            sym = self.par_column[self.par_rows[self.par_places[key]]]
+            sym = self.par_store[self.par_rows[self.par_places[key]]]
         self[key] = sym
         return sym
 
@@ -769,6 +770,10 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         bound.append((el, params, plain, offsets))
     par_column = _symbols(par_names, split=False)[0]
     flat.__dict__["_parameter_column"] = par_column
+    # the parameters' symbols as Python objects, each formed on first read and shared
+    # by the element's symbols and the record; all at once when many are read alone
+    # (passed on to parts, R=R: each read alone costs 5 us)
+    par_store = ColumnRows(par_column)
     # id -> the row of each parameter in the column, in declaration order: its own, or
     # for a parameter passed on unchanged (R=R) its parent's; -1 for an expression
     par_rows = flat.__dict__["_parameter_rows"] = {}
@@ -793,7 +798,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
             owner_path = owner._path_cache if owner is not None else ""
             el_rows = par_rows[id(el)] = list(range(pi, pi + len(params)))
             if plain:       # each parameter's symbol read from the column on first read
-                syms.par_column, syms.par_rows = par_column, el_rows
+                syms.par_store, syms.par_rows = par_store, el_rows
                 syms.par_places = _parameter_places(type(el))
             for j, (key, decl) in enumerate(params):
                 path = par_names[pi]
@@ -805,7 +810,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                         flat, el, key, decl, raw, values, problems, par_rows)
                     continue
                 if not plain:
-                    syms[key] = par_column[row]
+                    syms[key] = par_store[row]
                 value = float("nan")
                 if raw is None:
                     problems.add(ParameterError,
@@ -819,12 +824,12 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                     else:
                         _check_range(el, key, decl, value, problems)
                 own_values[key] = value
-                parameters[path] = _ColumnParameter(path, par_column, row, value, decl.unit,
+                parameters[path] = _ColumnParameter(path, par_store, row, value, decl.unit,
                                                     decl.doc, owner_path,
                                                     (decl.min, decl.max))
         elif plain:
             syms = _ColumnSyms()
-            syms.par_column, syms.par_rows, syms.par_places = None, (), _NO_PLACES
+            syms.par_store, syms.par_rows, syms.par_places = None, (), _NO_PLACES
         else:
             syms = {}
         if plain:
