@@ -346,18 +346,23 @@ class Origins(MutableSequence):
             return len(self.formed)
         return len(self.which) + len(self._extra)
 
+    def _at(self, k) -> int:
+        """``k`` counted from the start (IndexError out of range)."""
+        n = len(self)
+        if k < 0:
+            k += n
+        if not 0 <= k < n:
+            raise IndexError("origin index out of range")
+        return k
+
     def __getitem__(self, k):
         if self.formed is not None:
             return self.formed[k]
         if isinstance(k, slice):
             return [self[i] for i in range(*k.indices(len(self)))]
-        n = len(self.which)
-        if k < 0:
-            k += len(self)
+        k, n = self._at(k), len(self.which)
         if k >= n:
             return self._extra[k - n]
-        if k < 0:
-            raise IndexError("origin index out of range")
         origin = self.given.get(k)
         if origin is None:
             tpl = self.templates[self.which[k]]
@@ -372,13 +377,9 @@ class Origins(MutableSequence):
         if self.formed is not None:
             self.formed[k] = value
             return
-        n = len(self.which)
-        if k < 0:
-            k += len(self)
+        k, n = self._at(k), len(self.which)
         if k >= n:
             self._extra[k - n] = value
-        elif k < 0:
-            raise IndexError("origin assignment index out of range")
         else:
             self.given[k] = value
 
@@ -715,11 +716,11 @@ class _ColumnSyms(dict):
     def filled(self) -> "_ColumnSyms":
         """Every symbol read, in declaration order (parameters, then variables)."""
         offsets, places = self.offsets, self.par_places
-        if any(not dict.__contains__(self, k) for k in offsets) or \
-                any(not dict.__contains__(self, k) for k in places):
+        unread = any(not dict.__contains__(self, k) for k in offsets)
+        if unread or any(not dict.__contains__(self, k) for k in places):
             params = [(k, self[k]) for k in places]
             given = [(k, v) for k, v in self.items() if k not in offsets and k not in places]
-            if any(not dict.__contains__(self, k) for k in offsets):
+            if unread:
                 syms = ca.vertsplit(self.column[self.base:self.base + len(offsets)])
             else:
                 syms = [dict.__getitem__(self, k) for k in offsets]
@@ -853,6 +854,13 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     if not base and len(variables) == len(var_names):   # the column holds them all
         flat.__dict__["_variable_stack"] = (len(var_names), var_column,
                                             _RowsOf(variables))
+
+
+def _integers(shared: list, top: int):
+    """The integers 0 .. ``top`` to index: ``shared`` (the objects `_bind_symbols`
+    made, each held by a record) when it holds them all, else a range (whose items
+    are made on reading, as any sum is)."""
+    return shared if top < len(shared) else range(top + 1)
 
 
 def _first_row(el, late: dict) -> int:
@@ -1409,8 +1417,9 @@ class _Template:
         children = el._children
         state = flat.__dict__
         late = state.get("_rows", {})
+        shared = state.get("_ints", ())        # the integers of `_bind_symbols`
         bases = self.bases
-        bases.append(syms.row if type(syms) is _ColumnSyms else late.get(id(el), -1))
+        bases.append(_first_row(el, late))
         ports = [children[port] for port, _ in self.ports]
         bases.extend([_first_row(port, late) for port in ports])
         own = [syms] + [port._syms for port in ports]
@@ -1422,9 +1431,7 @@ class _Template:
             # their column (`symbols` forms the symbols if a message needs them;
             # `instantiate` takes them from the model's column by the rows in `bases`)
             base = [s.base for s in own]
-            ints = state.get("_ints", ())
-            if len(ints) != column.numel():      # not the rows of this column
-                ints = range(column.numel())
+            ints = _integers(shared, column.numel() - 1)
             # and each parameter slot laid out as bound (`par_slots`, the first ones)
             # the parameter's row in the column of the parameters, if it has one
             prows = state.get("_parameter_rows", {}).get(id(el)) if self.par_slots \
@@ -1469,11 +1476,8 @@ class _Template:
         base = bases[-1 - len(self.ports):]
         if self.row_hints is not None and all(base[w] >= 0 for w in self.row_bases):
             # by variable number (its row in the model's variables), see `_Template`
-            # the numbers are the shared integers of `_bind_symbols` where it made them
-            ints = state.get("_ints", ())
-            top = max((base[w] for w in self.row_bases), default=0) + self.row_span
-            if top >= len(ints):                  # a row past them: a port bound late
-                ints = range(top + 1)
+            ints = _integers(shared, max((base[w] for w in self.row_bases), default=0)
+                             + self.row_span)
             hints = [h if h[0] == "none" else
                      ("pair", ints[base[h[1]] + h[2]], ints[base[h[3]] + h[4]], h[5])
                      if h[0] == "pair" else ("const", ints[base[h[1]] + h[2]], h[3])
@@ -1485,11 +1489,9 @@ class _Template:
         else:
             hints = self.root_hints
         first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
-        ints = state.get("_ints", ())
-        rows = ints[first:first + len(hints)] if first + len(hints) <= len(ints) else \
-            range(first, first + len(hints))
-        flat.equations += [_TemplateEquation(self, owner, hint, row)
-                           for row, hint in zip(rows, hints)]
+        last = first + len(hints)
+        flat.equations += [_TemplateEquation(self, owner, hint, row) for row, hint
+                           in zip(_integers(shared, last - 1)[first:last], hints)]
 
     def instantiate(self, flat: FlatModel) -> None:
         """Every instance's residuals from one call of the mapped function."""
