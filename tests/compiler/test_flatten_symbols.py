@@ -267,3 +267,70 @@ def test_column_rows_read_as_the_list_of_the_column_scalars(reads):
             rows.insert(2, ca.SX(9.0))
             assert _same(rows[2], 9.0) and _same(rows[3], want[2])
         assert len(rows) == 49 + 2 * (change == "insert")
+
+
+def test_the_variables_read_as_a_dictionary_in_declaration_order():
+    """`FlatModel.variables` holds names and records in two lists and builds its
+    dictionary by name on the first read by name: it must read, change and compare as
+    the dictionary it stands for, in either state."""
+    items = [(f"c{k}.v", object()) for k in range(6)]
+    for warm in (False, True):
+        got, want = fl._Variables(), {}
+        got.extend([n for n, _ in items], [r for _, r in items])
+        want.update(items)
+        if warm:
+            assert got["c0.v"] is want["c0.v"]         # the dictionary built now
+        assert list(got) == list(want) and len(got) == len(want)
+        assert list(got.values()) == list(want.values())
+        assert list(got.items()) == list(want.items())
+        assert got == want and dict(got) == want
+        new, again = object(), object()
+        got["c2.v"] = want["c2.v"] = new                # replaced in place
+        got["x.v"] = want["x.v"] = again                # appended
+        del got["c0.v"], want["c0.v"]
+        assert list(got.items()) == list(want.items())
+        assert got.get("c0.v") is None and "c0.v" not in got and "c3.v" in got
+        with pytest.raises(KeyError):
+            got["c0.v"]
+        more = fl._Variables(got.items())
+        more.extend(["y.v"], [new])                     # not empty: one by one
+        assert list(more) == list(want) + ["y.v"] and more["y.v"] is new
+
+
+def spring_chain(n: int = 8):
+    """Masses on springs and dampers in parallel from a fixed reference, the last
+    spring stretched at the start (a start value with priority)."""
+    from mechatron.library import translational as tr
+    m = mt.System("spring_chain")
+    prev = m.add("ref", tr.TranslationalReference()).port
+    for k in range(n):
+        mass = m.add(f"m{k}", tr.Mass(m=1.0 + k))
+        start = {"x": mt.Start(0.01, "high")} if k == n - 1 else {}
+        spring = m.add(f"k{k}", tr.TranslationalSpring(k=1e4, **start))
+        damper = m.add(f"b{k}", tr.TranslationalDamper(b=50.0))
+        m.connect(mass.port, spring.A, damper.A)
+        m.connect(spring.B, damper.B, prev)
+        prev = mass.port
+    return m
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(12), spring_chain])
+def test_a_compile_of_instances_bound_in_bulk_reads_no_variable_by_name(build, monkeypatch):
+    """Every pass reads the variables of a model bound in bulk by row (alias
+    elimination and the dimension check take a differentiated variable's row from its
+    class template), so a compile never builds the dictionary of all their names: a
+    million names entered cost 0.6 us each. The compiled model is the same."""
+    built = []
+    by_name = fl._Variables._by_name
+
+    def watched(self):
+        if self._index is None:
+            built.append(len(self))
+        return by_name(self)
+
+    want = mt.compile_model(build())
+    monkeypatch.setattr(fl._Variables, "_by_name", watched)
+    got = mt.compile_model(build())
+    assert built == []
+    assert got.state_names == want.state_names and got.alg_names == want.alg_names
+    assert got.names == want.names and got.units == want.units

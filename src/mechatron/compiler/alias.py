@@ -315,7 +315,7 @@ def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
     rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
                      _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
     if derivative:
-        rank[[index[d] for d in derivative if d in index and index[d] < n]] += 4
+        rank[_differentiated(flat, index, n)] += 4
     k = np.arange(n)
     # each class together, in class order; in a class the best member first (highest
     # rank, the first declared among equals)
@@ -361,11 +361,27 @@ def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
         groups: dict[int, list] = {}
         for j, c in zip(with_start.tolist(), cls[with_start].tolist()):
             groups.setdefault(c, []).append(j)
+        records = _records(flat)
         for c, members in groups.items():
             b = int(best_of[c])
             _merge_starts(result, flat, names[b],
-                          [(names[j], float(f[j] / f[b])) for j in members])
+                          [(names[j], float(f[j] / f[b]), records[j]) for j in members])
     return gone
+
+
+def _differentiated(flat, index, n: int) -> list[int]:
+    """The numbers of the model's variables (below ``n``) whose derivative appears, in
+    the order of the derivatives: the rows class templates noted as they bound them
+    (`flatten._Template.add`), else by name."""
+    rows = flat.__dict__.get("_derivative_rows") or {}
+    out = []
+    for d in flat.context.derivative:
+        j = rows.get(d)
+        if j is None:
+            j = index.get(d, n)
+        if j < n:
+            out.append(j)
+    return out
 
 
 def _replacements(flat, names, index, gone, result) -> tuple[ca.SX | None, ca.SX | None]:
@@ -391,7 +407,7 @@ def _replacements(flat, names, index, gone, result) -> tuple[ca.SX | None, ca.SX
     der_old, der_new = [], []
     if derivative:
         differentiated = np.zeros(len(names), dtype=bool)
-        differentiated[[index[d] for d in derivative if index.get(d, n) < n]] = True
+        differentiated[_differentiated(flat, index, n)] = True
         for j in gone[differentiated[gone]].tolist():
             der_old.append(derivative[names[j]])
             r = rep[j]
@@ -411,10 +427,17 @@ def _rank(var, differentiated: bool):
             -len(var.name))
 
 
+def _records(flat: FlatModel) -> list:
+    """The variables' records by row (their declaration order), without reading a name."""
+    variables = flat.variables
+    return variables.records() if hasattr(variables, "records") else list(variables.values())
+
+
 def _merge_starts(result: AliasResult, flat: FlatModel, rep: str, members) -> None:
+    """The start value of the class of ``rep`` from its ``members`` (name, factor,
+    record) that have one: the highest priority; two high ones must agree."""
     best = None
-    for name, k in members:
-        var = flat.variables[name]
+    for name, k, var in members:
         if var.start is None:
             continue
         value = var.start / k

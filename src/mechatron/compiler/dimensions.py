@@ -399,12 +399,16 @@ class _Symbols:
             d = self._dim(p.unit)
             # a model's external input of unit "1": a free signal
             return FREE if p.is_input and d == ONE else d
+        base = ctx.integral.get(name)      # "der(x)" -> "x"
+        if base is not None:
+            # a variable that a class template differentiated: its dimension by its row
+            row = (flat.__dict__.get("_derivative_rows") or {}).get(base)
+            return _der(self.dims[row] if row is not None else self.of(base))
         v = flat.variables.get(name)
         if v is not None:           # not met: the variables are the walk's input
             d = self._dim(v.unit)
             return FREE if d == ONE and _free_signal(v, flat.physical_owners) else d
-        base = ctx.integral.get(name)      # "der(x)" -> "x"
-        return _der(self.of(base)) if base is not None else FREE
+        return FREE
 
 
 def _free_signal(v, physical) -> bool:

@@ -9,7 +9,8 @@ connections imply (handed to alias elimination rather than written as equations)
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping, MutableSequence
+from collections.abc import (ItemsView, Mapping, MutableMapping, MutableSequence,
+                             ValuesView)
 from dataclasses import dataclass, field
 from itertools import repeat
 
@@ -205,6 +206,96 @@ class ColumnRows(MutableSequence):
         out = ColumnRows(self.column, list(self._items))
         out._reads, out._formed = self._reads, self._formed
         return out
+
+
+class _Variables(MutableMapping):
+    """`FlatModel.variables`: name -> record, in declaration order, held as two lists
+    (the names, the records). The dictionary by name is built on the first read by name;
+    iterating, counting and reading the records in order never build it. A compile reads
+    its variables by row (`_first_row`, template slots, alias numbers), so a model bound
+    in bulk is compiled without entering every name in a dictionary: at 10^6 variables,
+    40 MB and a lookup's cache misses per name. Replacing or deleting a name already
+    there finds its place by a search (rare: flattening only appends)."""
+
+    __slots__ = ("_names", "_records", "_index")
+
+    def __init__(self, items=()):
+        self._names: list[str] = []
+        self._records: list = []
+        self._index: dict | None = None
+        self.update(items)
+
+    def extend(self, names: list[str], records: list) -> None:
+        """Append the new ``names`` with their ``records``; the lists are taken as they
+        are when there is nothing yet (`_bind_symbols`)."""
+        if not self._names and self._index is None:
+            self._names, self._records = names, records
+            return
+        for name, record in zip(names, records):
+            self[name] = record
+
+    def records(self) -> list:
+        """The records in declaration order (by row): the list held, not a copy."""
+        return self._records
+
+    def _by_name(self) -> dict:
+        index = self._index
+        if index is None:
+            index = self._index = dict(zip(self._names, self._records))
+        return index
+
+    def __getitem__(self, name):
+        return self._by_name()[name]
+
+    def get(self, name, default=None):
+        return self._by_name().get(name, default)
+
+    def __contains__(self, name) -> bool:
+        return name in self._by_name()
+
+    def __setitem__(self, name, record) -> None:
+        index = self._by_name()
+        if name in index:
+            self._records[self._names.index(name)] = record
+        else:
+            self._names.append(name)
+            self._records.append(record)
+        index[name] = record
+
+    def __delitem__(self, name) -> None:
+        del self._by_name()[name]
+        k = self._names.index(name)
+        del self._names[k]
+        del self._records[k]
+
+    def __iter__(self):
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+    def values(self):
+        return _RecordsView(self)
+
+    def items(self):
+        return _NamedRecordsView(self)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({dict(zip(self._names, self._records))!r})"
+
+
+class _RecordsView(ValuesView):
+    """The records in order, read off their list (no lookup by name)."""
+
+    def __iter__(self):
+        return iter(self._mapping._records)
+
+
+class _NamedRecordsView(ItemsView):
+    """``(name, record)`` in order, read off the two lists."""
+
+    def __iter__(self):
+        return zip(self._mapping._names, self._mapping._records)
 
 
 class _RowsOf:
@@ -445,7 +536,7 @@ class FlatModel:
     parameters: dict[str, FlatParameter] = field(default_factory=dict)
     #: parameters of parts bound to expressions of their parents' parameters
     bound_parameters: dict[str, BoundParameter] = field(default_factory=dict)
-    variables: dict[str, FlatVariable] = field(default_factory=dict)
+    variables: MutableMapping[str, FlatVariable] = field(default_factory=_Variables)
     equations: list[FlatEquation] = field(default_factory=list)
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
     components: dict[str, str] = field(default_factory=dict)  # path -> class name
@@ -618,6 +709,7 @@ def _declaration_order(flat: FlatModel) -> None:
     late = flat.__dict__.pop("_late", None)
     if not late:
         return
+    flat.__dict__.pop("_derivative_rows", None)     # rows in the old order: by name
     late.sort(key=lambda item: item[:2])
     moved = {n for *_, names in late for n in names}
     rest = [n for n in flat.variables if n not in moved]
@@ -630,7 +722,7 @@ def _declaration_order(flat: FlatModel) -> None:
     order.extend(rest[start:])
     variables = flat.variables
     number = dict(zip(variables, range(len(variables))))
-    flat.variables = {n: variables[n] for n in order}
+    flat.variables = _Variables((n, variables[n]) for n in order)
     if type(flat.context.unknowns) is _Unknowns:
         flat.context.unknowns.variables = flat.variables
     flat.__dict__.pop("_variable_stack", None)     # stacked in the old order
@@ -789,7 +881,10 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     base = len(variables)            # variables bound before (none in flatten)
     if not base:
         flat.__dict__["_ints"] = ints
-    variables.update(zip(var_names, records))
+    if type(variables) is _Variables:
+        variables.extend(var_names, records)
+    else:
+        variables.update(zip(var_names, records))
     pi = vi = 0
     for el, params, plain, offsets in bound:
         if params:
@@ -1440,16 +1535,23 @@ class _Template:
             args = [ints[base[w] + x] if is_var else
                     prows[i] if i < k and prows[i] >= 0 else own[w][x]
                     for i, (is_var, w, x) in enumerate(self.slots)]
+            by_row = True
             if k:
                 self.par_column = state["_parameter_column"]
             self.var_column = column
         else:
             args = [own[w][k] for w, k in self.slot_keys]
+            by_row = False
         owner = el._path_cache
         if self.derived:
             rel = self.relative
             names = [owner + rel[i] for i in self.derived] if owner else \
                 [rel[i][1:] for i in self.derived]
+            if by_row:      # each differentiated variable's row, for alias elimination
+                slots = self.slots
+                state.setdefault("_derivative_rows", {}).update(
+                    [(name, args[i]) for name, i in zip(names, self.derived)
+                     if slots[i][0]])
             ctx = flat.context
             der_rows = self.der_rows
             for name in names:
