@@ -1535,23 +1535,16 @@ class _Template:
             args = [ints[base[w] + x] if is_var else
                     prows[i] if i < k and prows[i] >= 0 else own[w][x]
                     for i, (is_var, w, x) in enumerate(self.slots)]
-            by_row = True
             if k:
                 self.par_column = state["_parameter_column"]
             self.var_column = column
         else:
             args = [own[w][k] for w, k in self.slot_keys]
-            by_row = False
         owner = el._path_cache
         if self.derived:
             rel = self.relative
             names = [owner + rel[i] for i in self.derived] if owner else \
                 [rel[i][1:] for i in self.derived]
-            if by_row:      # each differentiated variable's row, for alias elimination
-                slots = self.slots
-                state.setdefault("_derivative_rows", {}).update(
-                    [(name, args[i]) for name, i in zip(names, self.derived)
-                     if slots[i][0]])
             ctx = flat.context
             der_rows = self.der_rows
             for name in names:
@@ -1576,6 +1569,15 @@ class _Template:
         if self.par_slots:
             self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
         base = bases[-1 - len(self.ports):]
+        if self.derived and self.var_rows is not None:
+            # each differentiated variable's row among the model's variables (its
+            # element's first row and its place after it), read by alias elimination
+            # and the dimension check instead of its name
+            slots = self.slots
+            state.setdefault("_derivative_rows", {}).update(
+                [(name, base[slots[i][1]] + slots[i][2])
+                 for name, i in zip(names, self.derived)
+                 if slots[i][0] and base[slots[i][1]] >= 0])
         if self.row_hints is not None and all(base[w] >= 0 for w in self.row_bases):
             # by variable number (its row in the model's variables), see `_Template`
             ints = _integers(shared, max((base[w] for w in self.row_bases), default=0)
