@@ -184,8 +184,11 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     stacked = stack_residuals(kept) if kept else None
     result = AliasResult([], origins, owners, [], n_before=n_before)
     if n:
-        gone = _classes(flat, names, index, parent, factor, const, result)
-        old, new = _replacements(flat, names, index, gone, result) if kept else (None, None)
+        # the numbers of the differentiated variables, read by both steps below
+        derived = _differentiated(flat, index, n)
+        gone = _classes(flat, names, index, parent, factor, const, result, derived)
+        old, new = _replacements(flat, names, index, gone, result, derived) if kept \
+            else (None, None)
         if old is not None:
             stacked = ca.substitute(stacked, old, new)
     # the union-find is done: the numbering lives on in `result.eliminated` (read with
@@ -276,12 +279,12 @@ class _Numbers:
         return j
 
 
-def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
+def _classes(flat, names, index, parent, factor, const, result, derived) -> np.ndarray:
     """Every alias class with its representative: the unknowns, the eliminated
     variables (returned, by number, in order) and the start values of ``result``, class
-    by class in the order of each class's first member, members in declaration order."""
+    by class in the order of each class's first member, members in declaration order.
+    ``derived``: the numbers of the differentiated variables (`_differentiated`)."""
     n = len(names)
-    derivative = flat.context.derivative
     up = np.array(parent, dtype=np.intp)
     f = np.array(factor)
     while True:                       # pointer jumping: every node onto its root
@@ -314,8 +317,7 @@ def _classes(flat, names, index, parent, factor, const, result) -> np.ndarray:
     has_start = np.array([key[0] for key in table], dtype=bool)[codes]
     rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
                      _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
-    if derivative:
-        rank[_differentiated(flat, index, n)] += 4
+    rank[derived] += 4
     k = np.arange(n)
     # each class together, in class order; in a class the best member first (highest
     # rank, the first declared among equals)
@@ -384,13 +386,13 @@ def _differentiated(flat, index, n: int) -> list[int]:
     return out
 
 
-def _replacements(flat, names, index, gone, result) -> tuple[ca.SX | None, ca.SX | None]:
+def _replacements(flat, names, index, gone, result,
+                  derived) -> tuple[ca.SX | None, ca.SX | None]:
     """The eliminated variables and their derivatives, and what replaces them, as two
     columns for one substitution; (None, None) if nothing is replaced."""
     if not len(gone):
         return None, None
     derivative = flat.context.derivative
-    n = len(names)
     rep, scale = result.representative, result.scale
     column = flat.stack_variables()          # every variable, in declaration order
     old, new = [], []
@@ -407,7 +409,7 @@ def _replacements(flat, names, index, gone, result) -> tuple[ca.SX | None, ca.SX
     der_old, der_new = [], []
     if derivative:
         differentiated = np.zeros(len(names), dtype=bool)
-        differentiated[_differentiated(flat, index, n)] = True
+        differentiated[derived] = True
         for j in gone[differentiated[gone]].tolist():
             der_old.append(derivative[names[j]])
             r = rep[j]

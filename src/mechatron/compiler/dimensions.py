@@ -375,6 +375,8 @@ class _Symbols:
         self.dims = dims
         # the variables' column is stacked once per model (shared with other passes)
         self.vector = flat.stack_variables()
+        # a differentiated variable's row, noted by its class template (by name else)
+        self.derived_rows = flat.__dict__.get("_derivative_rows") or {}
 
     def _dim(self, unit: str):
         d = unit_dimension(unit)
@@ -402,7 +404,7 @@ class _Symbols:
         base = ctx.integral.get(name)      # "der(x)" -> "x"
         if base is not None:
             # a variable that a class template differentiated: its dimension by its row
-            row = (flat.__dict__.get("_derivative_rows") or {}).get(base)
+            row = self.derived_rows.get(base)
             return _der(self.dims[row] if row is not None else self.of(base))
         v = flat.variables.get(name)
         if v is not None:           # not met: the variables are the walk's input
