@@ -722,7 +722,8 @@ def _declaration_order(flat: FlatModel) -> None:
     order.extend(rest[start:])
     variables = flat.variables
     number = dict(zip(variables, range(len(variables))))
-    flat.variables = _Variables((n, variables[n]) for n in order)
+    flat.variables = _Variables()
+    flat.variables.extend(order, [variables[n] for n in order])
     if type(flat.context.unknowns) is _Unknowns:
         flat.context.unknowns.variables = flat.variables
     flat.__dict__.pop("_variable_stack", None)     # stacked in the old order
