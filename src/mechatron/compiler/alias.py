@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.flatten import (ColumnRows, FlatEquation, FlatModel, Origins,
-                                       stack_residuals)
+                                       stack_columns, stack_residuals)
 from mechatron.errors import InitializationError
 
 __all__ = ["AliasResult", "eliminate_aliases"]
@@ -418,7 +418,7 @@ def _replacements(flat, names, index, gone, result,
     if der_old:
         old.append(ca.vertcat(*der_old))
         new.append(ca.vertcat(*der_new))
-    return ca.vertcat(*old), ca.vertcat(*new)
+    return stack_columns(*old), stack_columns(*new)
 
 
 def _rank(var, differentiated: bool):

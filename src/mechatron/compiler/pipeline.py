@@ -16,7 +16,7 @@ from mechatron.compiler.dimensions import check_dimensions as _check_dimensions
 from mechatron.compiler.events import Lowering as EventLowering
 from mechatron.compiler.events import (bind_pre, clock_distances, direct_relations,
                                         prepare_events, replace_pre)
-from mechatron.compiler.flatten import ColumnRows, flatten
+from mechatron.compiler.flatten import ColumnRows, flatten, stack_columns
 from mechatron.compiler.relations import extract_relations
 from mechatron.compiler.structure import lower
 from mechatron.core.component import Component
@@ -174,7 +174,6 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     ctx = flat.context
     params = list(flat.parameters.values())
     p = flat.parameter_column()     # the symbols formed alone only where read alone
-    der_syms = [ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative]
     residuals, origins, owners = alias.residuals, alias.origins, alias.owners
     # stacked once (by alias elimination) for the relation scan and the structural
     # analysis (a vertcat converts each scalar from Python: about 1 us each)
@@ -189,10 +188,23 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     unknown_rows = alias.unknown_index if alias.unknown_index is not None else \
         np.zeros(0, dtype=np.intp)
     unknown_col = flat.stack_rows(unknown_rows.tolist())
-    stacked = (res_vec, ca.vertcat(unknown_col, ca.vertcat(*der_syms))) \
+    # each unknown's derivative symbol (None if it has none) and theirs stacked: by row
+    # when the class templates made them, else by name (a vertcat of scalars)
+    by_row = flat.derivatives_by_row(unknown_rows.tolist())
+    if by_row is None:
+        der_of = [ctx.derivative.get(n) for n in alias.unknowns]
+        der_syms = [d for d in der_of if d is not None]
+        der_col = ca.vertcat(*der_syms) if der_syms else ca.SX(0, 1)
+    else:
+        der_of, der_col = by_row
+    stacked = (res_vec, stack_columns(unknown_col, der_col)) \
         if residuals and not relations else None
     residuals = scanned
+    n_der = len(ctx.derivative)
     plan = prepare_events(flat, alias, relations)
+    if len(ctx.derivative) != n_der:      # an event made a derivative: read them again
+        der_of = [ctx.derivative.get(n) for n in alias.unknowns]
+        stacked = None
     lap("relations")
 
     variables = flat.variables
@@ -216,15 +228,14 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     # the hints are read only by messages; the declaration order of the unknowns only
     # by state selection, when index reduction differentiated something
     hints = _OnDemand(lambda: {n: v.hint for n, v in variables.items() if v.hint})
-    low = lower(flat.name, residuals, origins, alias.unknowns, syms,
-                {n: ctx.derivative[n] for n in alias.unknowns if n in ctx.derivative},
+    low = lower(flat.name, residuals, origins, alias.unknowns, syms, der_of,
                 ctx.time, start_guess, hints, preference=_state_preference(flat, alias),
                 declared=_OnDemand(lambda: dict(zip(alias.unknowns,
                                                     unknown_rows.tolist()))),
                 roles=_OnDemand(lambda: _port_roles(flat, alias)),
                 classes=flat.components, physical=flat.physical_owners,
                 parameters=ColumnRows(p) if params else [], stacked=stacked,
-                others=ca.vertcat(p, ctx.time))
+                others=stack_columns(p, ctx.time))
     lap("structure")
 
     # every logged variable as an expression of the unknowns
@@ -265,10 +276,10 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
 
     t = ctx.time
     x = low.state_col if low.state_syms else ca.SX(0, 1)
-    X = ca.vertcat(x, modes, counters, tlast)
+    X = stack_columns(x, modes, counters, tlast)
     z = ca.vertcat(*low.alg_syms) if low.alg_syms else ca.SX(0, 1)
     nr = len(relations)
-    xdot = ca.vertcat(ode_col, ca.SX.zeros(3 * nr)) if (n_ode or nr) else ca.SX(0, 1)
+    xdot = stack_columns(ode_col, ca.SX.zeros(3 * nr)) if (n_ode or nr) else ca.SX(0, 1)
     args, argn = [t, X, z, p], ["t", "x", "z", "p"]
     f_ode = ca.Function("ode", args, [xdot], argn, ["ode"])
     f_alg = ca.Function("alg", args, [res_col], argn,

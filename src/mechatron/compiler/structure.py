@@ -17,7 +17,7 @@ from itertools import chain
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.flatten import ColumnRows, Origins
+from mechatron.compiler.flatten import ColumnRows, Origins, stack_columns
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
 from mechatron.compiler.linear import (Combined, jacobian_apart, owner_of, reveal,
@@ -100,7 +100,7 @@ class _Singular(StructuralError):
 
 def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[str],
           syms: dict[str, ca.SX] | list[ca.SX] | ColumnRows,
-          derivative: dict[str, ca.SX], time: ca.SX,
+          derivative: dict[str, ca.SX] | list[ca.SX | None], time: ca.SX,
           start_guess, hints: dict[str, str],
           preference: dict[str, float] | None = None,
           declared: dict[str, int] | None = None,
@@ -119,7 +119,7 @@ def lower(name: str, residuals: list[ca.SX], origins: list[str], unknowns: list[
     unknowns
         Names of the unknowns (alias representatives); ``syms`` maps names to symbols
         (or lists them in the order of ``unknowns``) and ``derivative`` names to
-        derivative symbols.
+        derivative symbols (or lists each unknown's, None where it has none).
     start_guess : callable
         ``start_guess(list_of_syms) -> ndarray``, numeric point for Jacobian-based choices.
     hints
@@ -198,8 +198,9 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         [syms[n] for n in unknowns]
     var_names: list[str] = list(unknowns)
     var_to_diff = [-1] * len(var_syms)
-    for i, n in enumerate(unknowns):
-        d = derivative.get(n)
+    ders = derivative if isinstance(derivative, list) else \
+        [derivative.get(n) for n in unknowns]
+    for i, (n, d) in enumerate(zip(unknowns, ders)):
         if d is not None:
             var_to_diff[i] = len(var_syms)
             var_syms.append(d)
@@ -226,7 +227,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     reduction = reveal(name, res, orig, var_syms, var_names, var_to_diff, adj, roles,
                        classes, parameters, stacked=(res_vec, var_vec) if res else None,
                        sparsity=pattern, jacobian=jac,
-                       symbols=ca.vertcat(var_vec, others)
+                       symbols=stack_columns(var_vec, others)
                        if res and others is not None and stacked is not None else None)
     try:
         ir = pantelides(len(var_syms), reduction.adj, var_to_diff)
@@ -400,9 +401,10 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         # one copy of each stacked vector in the order of the blocks: the solved
         # variables read off the singles' column, the expressions off their pieces
         n_x, n_bulk = bulk_x.numel(), len(bulk_solved)
-        out.assigned = (ca.vertcat(bulk_x, *syms) if syms else bulk_x)[
+        out.assigned = (stack_columns(bulk_x, ca.vertcat(*syms)) if syms else bulk_x)[
             [bulk_solved[k] if k >= 0 else n_x - 1 - k for k in order]]
-        out.assigned_expr = ca.vertcat(*bulk_sols, *exprs)[
+        out.assigned_expr = stack_columns(*bulk_sols, *([ca.vertcat(*exprs)] if exprs
+                                                         else []))[
             [k if k >= 0 else n_bulk - 1 - k for k in order]]
     ders = [var_to_diff[v] for v in states]
     out.state_col, out.ode_col = (
