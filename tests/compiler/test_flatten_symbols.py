@@ -334,3 +334,64 @@ def test_a_compile_of_instances_bound_in_bulk_reads_no_variable_by_name(build, m
     assert built == []
     assert got.state_names == want.state_names and got.alg_names == want.alg_names
     assert got.names == want.names and got.units == want.units
+
+
+def _parts(kind):
+    a, b = ca.SX.sym("a", 5), ca.SX.sym("b", 3)
+    return {"symbols": [a, b],
+            "expressions and a scalar": [2 * a + 1, ca.SX.sym("s"), ca.sin(b)],
+            "an empty part": [a, ca.SX(0, 1), b],
+            "one part": [a * 3],
+            "a structural zero": [a, ca.SX(ca.Sparsity.triplet(4, 1, [0, 2], [0, 0]),
+                                            ca.vertcat(b[0], b[1]))],
+            "a matrix": [ca.SX.sym("m", 2, 2), ca.SX.sym("n", 1, 2)]}[kind]
+
+
+@pytest.mark.parametrize("kind", ["symbols", "expressions and a scalar", "an empty part",
+                                  "one part", "a structural zero", "a matrix"])
+def test_columns_stacked_by_slices_are_casadis_vertcat(kind):
+    """`stack_columns` is `casadi.vertcat`: the same shape, sparsity and expressions,
+    whether it copies dense columns by slices or hands other parts to `vertcat`."""
+    parts = _parts(kind)
+    got, want = fl.stack_columns(*parts), ca.vertcat(*parts)
+    assert got.shape == want.shape and got.sparsity() == want.sparsity()
+    assert ca.is_equal(got, want, 2)
+    free = ca.symvar(want)
+    f = ca.Function("f", free, [got - want])
+    point = np.random.default_rng(1).normal(size=len(free))
+    assert np.all(np.array(f(*point)) == 0.0)
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(6), spring_chain])
+def test_the_derivatives_read_by_row_are_the_ones_named(build):
+    """The derivative of each variable read by its row (class templates note the rows of
+    the derivatives they make) is the symbol the build context holds under its name,
+    None where it has none; the column holds those symbols in order. Once a derivative
+    is made by name alone, rows no longer cover them all, and none is read by row."""
+    flat = fl.flatten(build())
+    names = list(flat.variables)
+    rows = list(range(len(names)))[::-1]                 # any order of rows
+    got = flat.derivatives_by_row(rows)
+    assert got is not None
+    ders, column = got
+    want = [flat.context.derivative.get(names[k]) for k in rows]
+    assert [d is None for d in ders] == [w is None for w in want]
+    assert any(d is not None for d in ders)
+    assert all(d is w for d, w in zip(ders, want) if w is not None)
+    assert ca.is_equal(column, ca.vertcat(*[w for w in want if w is not None]), 1)
+    flat.context.der_symbol(names[0] + "_by_name")
+    assert flat.derivatives_by_row(rows) is None
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(6), spring_chain])
+def test_a_compile_reading_derivatives_by_name_gives_the_same_model(build, monkeypatch):
+    """The derivatives read by row or by name compile to the same model."""
+    want = mt.compile_model(build())
+    monkeypatch.setattr(fl.FlatModel, "derivatives_by_row", lambda self, rows: None)
+    got = mt.compile_model(build())
+    assert got.state_names == want.state_names and got.alg_names == want.alg_names
+    assert got.names == want.names
+    for f in ("f_ode", "f_out"):
+        a, b = getattr(want, f), getattr(got, f)
+        args = [np.full(a.size_in(i), 0.3 + 0.1 * i) for i in range(a.n_in())]
+        assert np.array_equal(np.array(a(*args)), np.array(b(*args)))

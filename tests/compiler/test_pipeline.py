@@ -89,3 +89,26 @@ def test_a_compile_reads_the_unknowns_and_residuals_off_their_columns(build, mon
     assert len(cm.state_names) >= 20
     assert sum(isinstance(h, fl.ColumnRows) for h in handed) == 2   # residuals, unknowns
     assert formed == []
+
+
+def test_variables_read_through_alias_elimination_take_their_factor_or_constant():
+    """`_read_through` gives each variable ``scale * x[rep]`` where it is kept and the
+    constant ``scale`` where it is not: checked against the same sums in NumPy, for
+    factors 1, -1 and others, repeated representatives and constants (0 among them)."""
+    import casadi as ca
+    import numpy as np
+
+    from mechatron.compiler.pipeline import _read_through
+
+    rng = np.random.default_rng(3)
+    n = 400
+    x = ca.SX.sym("x", 60)
+    rep = rng.integers(-1, 60, n)
+    scale = rng.choice([1.0, -1.0, 2.5, 0.0, -0.75], n)
+    kept = rep >= 0
+    column = _read_through(x, rep, scale, kept)
+    assert column.shape == (n, 1) and column.nnz() == n
+    point = rng.normal(size=60)
+    got = np.array(ca.Function("f", [x], [column])(point)).ravel()
+    want = np.where(kept, scale * point[np.maximum(rep, 0)], scale)
+    assert np.array_equal(got, want)
