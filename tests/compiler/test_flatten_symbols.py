@@ -395,3 +395,25 @@ def test_a_compile_reading_derivatives_by_name_gives_the_same_model(build, monke
         a, b = getattr(want, f), getattr(got, f)
         args = [np.full(a.size_in(i), 0.3 + 0.1 * i) for i in range(a.n_in())]
         assert np.array_equal(np.array(a(*args)), np.array(b(*args)))
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(5), spring_chain, nested_model])
+def test_flow_sums_are_rows_of_one_column_and_say_what_alias_elimination_would_read(build):
+    """The flow sums of connection sets are the rows of one column, formed as scalars
+    only when read, and gathered from it (`stack_residuals`). A sum of three terms or
+    more says it is no alias: exactly what alias elimination reads off its residual."""
+    from mechatron.compiler.alias import _read_alias
+
+    flat = fl.flatten(build())
+    sums = [eq for eq in flat.equations if isinstance(eq, fl._SumEquation)]
+    assert sums and len({id(eq.sums) for eq in sums}) == 1
+    column = sums[0].sums.column
+    assert ca.is_equal(fl.stack_residuals(sums), column[[eq.row for eq in sums]], 1)
+    said = 0
+    for eq in sums:
+        read = _read_alias(eq.residual, flat.variable_rows())
+        if eq.alias is not None:
+            said += 1
+            assert eq.alias == ("none",) and read is None
+            assert len(ca.symvar(eq.residual)) >= 3
+    assert said

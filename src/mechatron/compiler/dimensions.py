@@ -54,7 +54,8 @@ from itertools import repeat
 import casadi as ca
 
 from mechatron.compiler.flatten import (FlatModel, _bind_symbols, _collect_equations,
-                                        _TemplateEquation, _walk)
+                                        _TemplateEquation, _walk, stack_columns,
+                                        stack_residuals)
 from mechatron.core.component import Component
 from mechatron.core.context import BuildContext
 from mechatron.core.events import Clock
@@ -344,8 +345,9 @@ def infer(f: ca.Function, in_dims: list, free_dims: list | None = None) -> list:
     return out
 
 
-def _function(exprs: list, syms: ca.SX) -> ca.Function:
-    body = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
+def _function(exprs: list | ca.SX, syms: ca.SX) -> ca.Function:
+    body = exprs if isinstance(exprs, ca.SX) else ca.vertcat(*exprs) if exprs else \
+        ca.SX(0, 1)
     return ca.Function("dimensions", [syms], [body],
                        {"live_variables": False, "allow_free": True,
                         "cse": False})
@@ -461,9 +463,12 @@ def dimension_problems(flat, model=None) -> list[str]:
     # every instance (same declarations, bound parameters checked to their units):
     # the first instance stands for all
     eqs = [eq for eq in flat.equations if _checked(eq)]
-    rows = [eq.residual for eq in eqs]
     extra, extra_origins = _event_rows(flat)
-    f = _function(rows + extra, symbols.vector)
+    # the rows of templates and flow sums gathered from their columns (a vertcat of
+    # scalars converts each from Python)
+    rows = stack_residuals(eqs) if eqs else ca.SX(0, 1)
+    f = _function(stack_columns(rows, ca.vertcat(*extra)) if extra else rows,
+                  symbols.vector)
     dims = infer(f, symbols.dims, symbols.free(f))
     failing = [k for k, d in enumerate(dims) if type(d) is tuple]
     if not failing:

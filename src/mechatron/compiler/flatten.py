@@ -396,6 +396,43 @@ class _TemplateEquation(FlatEquation):
         _RESIDUAL_SLOT.__set__(self, value)
 
 
+class _Sums:
+    """The column of a model's flow sums (`_flow_sums`), shared by their equations."""
+
+    __slots__ = ("column",)
+
+    def __init__(self, column: ca.SX):
+        self.column = column
+
+
+class _SumEquation(FlatEquation):
+    """A flow sum of a connection set (`_flow_sums`): its residual is the row ``row`` of
+    the column of all flow sums, formed as a scalar only when read; alias elimination
+    gathers the rows from the column (`stack_residuals`). A sum of three terms or more
+    is no alias, and says so (``alias``), so that its residual is not read for that."""
+
+    __slots__ = ("row", "sums")
+
+    def __init__(self, sums: _Sums, row: int, origin, alias):
+        _RESIDUAL_SLOT.__set__(self, None)
+        self.sums, self.row, self.origin, self.owner, self.alias = sums, row, origin, "", alias
+
+    @property
+    def residual(self):
+        r = _RESIDUAL_SLOT.__get__(self)
+        if r is None:
+            r = self.sums.column[self.row]
+            _RESIDUAL_SLOT.__set__(self, r)
+        return r
+
+    @residual.setter
+    def residual(self, value):
+        _RESIDUAL_SLOT.__set__(self, value)
+
+
+_NO_ALIAS = ("none",)
+
+
 class Origins(MutableSequence):
     """The origin of each of a list of equations, as a list whose items are formed when
     read: a class template's equation (`_TemplateEquation`) is held as two numbers,
@@ -498,11 +535,13 @@ class Origins(MutableSequence):
 
 
 def stack_residuals(eqs) -> ca.SX:
-    """``vertcat`` of the residuals of ``eqs``: the rows of template equations gathered
-    from their classes' columns by one index (a residual set since, e.g. by `pre`'s
+    """``vertcat`` of the residuals of ``eqs``: the rows of template equations and flow
+    sums gathered from their columns by one index (a residual set since, e.g. by `pre`'s
     replacement, is taken as it is), the others stacked."""
     return _gather((eq.template.column, eq.row)
                    if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None
+                   else (eq.sums.column, eq.row)
+                   if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None
                    else (None, eq.residual) for eq in eqs)
 
 
@@ -2267,7 +2306,7 @@ def _port_variables(cls) -> tuple:
 def _flow_sums(flat: FlatModel, flow_sums) -> None:
     """The through-variable sums of all sets of three or more members, as one sparse
     signed incidence matrix times the vector of their variables (three CasADi calls in
-    all, not one per term)."""
+    all, not one per term), kept as one column (`_SumEquation`)."""
     if not flow_sums:
         return
     index: dict = {}        # each variable (by number or by path) -> its column in A
@@ -2280,8 +2319,16 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
     A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
     number = flat.variable_rows()
     x = flat.stack_rows([name if type(name) is int else number[name] for name in index])
-    for (_, origin), residual in zip(flow_sums, ca.vertsplit(ca.mtimes(A, x))):
-        flat.equations.append(FlatEquation(residual, origin))
+    sums = _Sums(ca.mtimes(A, x))
+    # the terms left in each sum (a variable met twice with opposite signs cancels): a
+    # sum of three or more is no alias; the others are read off their residuals
+    key = np.asarray(rows, dtype=np.int64) * max(len(index), 1) + np.asarray(cols)
+    uniq, inverse = np.unique(key, return_inverse=True)
+    total = np.bincount(inverse, weights=np.asarray(vals, dtype=float))
+    terms = np.bincount(uniq[total != 0] // max(len(index), 1),
+                        minlength=len(flow_sums)).tolist()
+    flat.equations += [_SumEquation(sums, r, origin, _NO_ALIAS if terms[r] > 2 else None)
+                       for r, (_, origin) in enumerate(flow_sums)]
 
 
 _DOMAINS: dict = {}
