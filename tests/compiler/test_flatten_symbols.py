@@ -406,8 +406,8 @@ def test_flow_sums_are_rows_of_one_column_and_say_what_alias_elimination_would_r
 
     flat = fl.flatten(build())
     sums = [eq for eq in flat.equations if isinstance(eq, fl._SumEquation)]
-    assert sums and len({id(eq.sums) for eq in sums}) == 1
-    column = sums[0].sums.column
+    assert sums and len({id(eq.column) for eq in sums}) == 1
+    column = sums[0].column
     assert ca.is_equal(fl.stack_residuals(sums), column[[eq.row for eq in sums]], 1)
     said = 0
     for eq in sums:

@@ -396,32 +396,24 @@ class _TemplateEquation(FlatEquation):
         _RESIDUAL_SLOT.__set__(self, value)
 
 
-class _Sums:
-    """The column of a model's flow sums (`_flow_sums`), shared by their equations."""
-
-    __slots__ = ("column",)
-
-    def __init__(self, column: ca.SX):
-        self.column = column
-
-
 class _SumEquation(FlatEquation):
     """A flow sum of a connection set (`_flow_sums`): its residual is the row ``row`` of
     the column of all flow sums, formed as a scalar only when read; alias elimination
     gathers the rows from the column (`stack_residuals`). A sum of three terms or more
     is no alias, and says so (``alias``), so that its residual is not read for that."""
 
-    __slots__ = ("row", "sums")
+    __slots__ = ("row", "column")
 
-    def __init__(self, sums: _Sums, row: int, origin, alias):
+    def __init__(self, column: ca.SX, row: int, origin, alias):
         _RESIDUAL_SLOT.__set__(self, None)
-        self.sums, self.row, self.origin, self.owner, self.alias = sums, row, origin, "", alias
+        self.column, self.row, self.origin, self.owner, self.alias = \
+            column, row, origin, "", alias
 
     @property
     def residual(self):
         r = _RESIDUAL_SLOT.__get__(self)
         if r is None:
-            r = self.sums.column[self.row]
+            r = self.column[self.row]
             _RESIDUAL_SLOT.__set__(self, r)
         return r
 
@@ -540,7 +532,7 @@ def stack_residuals(eqs) -> ca.SX:
     replacement, is taken as it is), the others stacked."""
     return _gather((eq.template.column, eq.row)
                    if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None
-                   else (eq.sums.column, eq.row)
+                   else (eq.column, eq.row)
                    if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None
                    else (None, eq.residual) for eq in eqs)
 
@@ -2319,7 +2311,7 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
     A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
     number = flat.variable_rows()
     x = flat.stack_rows([name if type(name) is int else number[name] for name in index])
-    sums = _Sums(ca.mtimes(A, x))
+    sums = ca.mtimes(A, x)
     # the terms left in each sum (a variable met twice with opposite signs cancels): a
     # sum of three or more is no alias; the others are read off their residuals
     key = np.asarray(rows, dtype=np.int64) * max(len(index), 1) + np.asarray(cols)
