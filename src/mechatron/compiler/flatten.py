@@ -115,6 +115,20 @@ class _ColumnVariable:
 _PAR_SYM_SLOT = FlatParameter.__dict__["sym"]
 
 
+def _formed_on_read(slot, form) -> property:
+    """A property over the slot ``slot`` (its descriptor) that, while the slot holds None,
+    forms the value by ``form(self)`` on the first read and keeps it; set, it holds what
+    it is given."""
+    def get(self):
+        value = slot.__get__(self)
+        if value is None:
+            value = form(self)
+            slot.__set__(self, value)
+        return value
+
+    return property(get, slot.__set__)
+
+
 class _ColumnParameter(FlatParameter):
     """A parameter bound in bulk (`_bind_symbols`): its symbol is the row ``row`` of the
     column of all parameters' symbols, formed as a Python object only when read (from
@@ -129,17 +143,7 @@ class _ColumnParameter(FlatParameter):
         self.unit, self.doc, self.owner, self.bounds = unit, doc, owner, bounds
         self.is_input = False
 
-    @property
-    def sym(self):
-        s = _PAR_SYM_SLOT.__get__(self)
-        if s is None:
-            s = self.store[self.row]
-            _PAR_SYM_SLOT.__set__(self, s)
-        return s
-
-    @sym.setter
-    def sym(self, value):
-        _PAR_SYM_SLOT.__set__(self, value)
+    sym = _formed_on_read(_PAR_SYM_SLOT, lambda q: q.store[q.row])
 
 
 class ColumnRows(MutableSequence):
@@ -409,17 +413,7 @@ class _SumEquation(FlatEquation):
         self.column, self.row, self.origin, self.owner, self.alias = \
             column, row, origin, "", alias
 
-    @property
-    def residual(self):
-        r = _RESIDUAL_SLOT.__get__(self)
-        if r is None:
-            r = self.column[self.row]
-            _RESIDUAL_SLOT.__set__(self, r)
-        return r
-
-    @residual.setter
-    def residual(self, value):
-        _RESIDUAL_SLOT.__set__(self, value)
+    residual = _formed_on_read(_RESIDUAL_SLOT, lambda eq: eq.column[eq.row])
 
 
 _NO_ALIAS = ("none",)
