@@ -362,12 +362,13 @@ def test_columns_stacked_by_slices_are_casadis_vertcat(kind):
     assert np.all(np.array(f(*point)) == 0.0)
 
 
-@pytest.mark.parametrize("build", [lambda: ladder(6), spring_chain])
+@pytest.mark.parametrize("build", [lambda: ladder(6), spring_chain, reading_model])
 def test_the_derivatives_read_by_row_are_the_ones_named(build):
     """The derivative of each variable read by its row (class templates note the rows of
     the derivatives they make) is the symbol the build context holds under its name,
     None where it has none; the column holds those symbols in order. Once a derivative
-    is made by name alone, rows no longer cover them all, and none is read by row."""
+    is made by name alone, rows no longer cover them all, and none is read by row. The
+    rows follow the variables when the folding of subsystem ports reorders them."""
     flat = fl.flatten(build())
     names = list(flat.variables)
     rows = list(range(len(names)))[::-1]                 # any order of rows

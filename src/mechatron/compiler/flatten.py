@@ -773,8 +773,9 @@ def _declaration_order(flat: FlatModel) -> None:
     late = flat.__dict__.pop("_late", None)
     if not late:
         return
-    flat.__dict__.pop("_derivative_rows", None)     # rows in the old order: by name
-    flat.__dict__.pop("_derivative_bulk", None)
+    # rows of differentiated variables in the old order (see `_Template.add`): moved below
+    der_rows = flat.__dict__.pop("_derivative_rows", None)
+    der_bulk = flat.__dict__.pop("_derivative_bulk", None)
     late.sort(key=lambda item: item[:2])
     moved = {n for *_, names in late for n in names}
     rest = [n for n in flat.variables if n not in moved]
@@ -796,6 +797,10 @@ def _declaration_order(flat: FlatModel) -> None:
     moved_to = [0] * len(order)
     for new, n in enumerate(order):
         moved_to[number[n]] = new
+    if der_rows:
+        flat.__dict__["_derivative_rows"] = {n: moved_to[r] for n, r in der_rows.items()}
+    if der_bulk:
+        flat.__dict__["_derivative_bulk"] = [(moved_to[r], k) for r, k in der_bulk]
     for eq in flat.equations:
         hint = eq.alias
         if hint is not None and hint[0] != "none" and type(hint[1]) is int:

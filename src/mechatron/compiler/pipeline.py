@@ -85,9 +85,10 @@ def _read_through(column: ca.SX, rep: np.ndarray, scale: np.ndarray,
 
 def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     """Every logged variable: names, units, docs, and the column of their expressions in
-    the unknowns, formed in bulk (no CasADi call per variable): by `_read_through`, or,
-    with folded ports, as one sparse matrix times the model's stacked variable symbols
-    plus constants. Each is a sum of model
+    the unknowns, formed in bulk (no CasADi call per variable): the model's variables by
+    `_read_through`, the variables of folded ports (sums) as one sparse matrix times the
+    model's stacked variable symbols plus constants, put in place between them. Each is
+    a sum of model
     variables read through alias elimination (a variable removed by it is a scaled
     representative or a constant): a model variable the sum of itself, a variable of a
     folded subsystem port (:mod:`mechatron.compiler.folding`) that of its terms, logged
@@ -112,48 +113,46 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     position = np.array([f[3] for f in folded], dtype=np.intp)
     var_row = np.arange(n) + np.searchsorted(position, np.arange(n), side="right")
     kept = rep >= 0
+    own = _read_through(flat.stack_variables(), rep, scale, kept)
     if not folded:
-        return names, units, docs, _read_through(flat.stack_variables(), rep, scale, kept)
-    rows = var_row[kept].tolist()
-    cols = rep[kept].tolist()
-    vals = scale[kept].tolist()
-    constant = np.zeros(n + len(folded))
-    constant[var_row[~kept]] = scale[~kept]
-    if folded:
-        # the folded variables' rows among the model's, then their terms in bulk
-        n_f = len(folded)
-        at = np.minimum(position, n) + np.arange(n_f)
-        is_folded = np.zeros(n + n_f, dtype=bool)
-        is_folded[at] = True
-        merged = []
-        for own, extra in ((names, [f[0] for f in folded]), (units, [f[1] for f in folded]),
-                           (docs, [f[2] for f in folded])):
-            out = np.empty(n + n_f, dtype=object)
-            out[at] = extra
-            out[~is_folded] = own
-            merged.append(out.tolist())
-        t_row = np.repeat(at, [len(f[4]) for f in folded])
-        t_var = np.fromiter(chain.from_iterable(f[4] for f in folded), dtype=np.intp,
-                            count=t_row.size)
-        t_coef = scale[t_var]
-        t_rep = rep[t_var]
-        gone = t_rep < 0
-        np.add.at(constant, t_row[gone], t_coef[gone])
-        # the terms of one representative add up (a triplet keeps one entry per place)
-        key = t_row[~gone].astype(np.int64) * max(n, 1) + t_rep[~gone]
-        uniq, inverse = np.unique(key, return_inverse=True)
-        sums = np.bincount(inverse, weights=t_coef[~gone], minlength=uniq.size)
-        rows += (uniq // max(n, 1)).tolist()
-        cols += (uniq % max(n, 1)).tolist()
-        vals += sums.tolist()
-        names, units, docs = merged
-    M = ca.DM.triplet(rows, cols, ca.DM(vals), len(names), n)
-    column = ca.mtimes(M, flat.stack_variables())
+        return names, units, docs, own
+    # the folded variables' rows among the model's, then their terms in bulk: one sparse
+    # product for those rows alone, the model's variables put in place around them
+    n_f = len(folded)
+    at = np.minimum(position, n) + np.arange(n_f)
+    is_folded = np.zeros(n + n_f, dtype=bool)
+    is_folded[at] = True
+    merged = []
+    for mine, extra in ((names, [f[0] for f in folded]), (units, [f[1] for f in folded]),
+                        (docs, [f[2] for f in folded])):
+        out = np.empty(n + n_f, dtype=object)
+        out[at] = extra
+        out[~is_folded] = mine
+        merged.append(out.tolist())
+    t_row = np.repeat(np.arange(n_f), [len(f[4]) for f in folded])
+    t_var = np.fromiter(chain.from_iterable(f[4] for f in folded), dtype=np.intp,
+                        count=t_row.size)
+    t_coef = scale[t_var]
+    t_rep = rep[t_var]
+    gone = t_rep < 0
+    constant = np.zeros(n_f)
+    np.add.at(constant, t_row[gone], t_coef[gone])
+    # the terms of one representative add up (a triplet keeps one entry per place)
+    key = t_row[~gone].astype(np.int64) * max(n, 1) + t_rep[~gone]
+    uniq, inverse = np.unique(key, return_inverse=True)
+    sums = np.bincount(inverse, weights=t_coef[~gone], minlength=uniq.size)
+    M = ca.DM.triplet((uniq // max(n, 1)).tolist(), (uniq % max(n, 1)).tolist(),
+                      ca.DM(sums.tolist()), n_f, n)
+    terms = ca.mtimes(M, flat.stack_variables())
     nonzero = np.flatnonzero(constant)
     if len(nonzero):         # the constants where there are any (a sparse column)
-        column = column + ca.DM.triplet(nonzero.tolist(), [0] * len(nonzero),
-                                        ca.DM(constant[nonzero].tolist()), len(names), 1)
-    return names, units, docs, ca.densify(column)
+        terms = terms + ca.DM.triplet(nonzero.tolist(), [0] * len(nonzero),
+                                      ca.DM(constant[nonzero].tolist()), n_f, 1)
+    column = ca.SX.zeros(n + n_f)
+    if n:
+        column.nz[var_row.tolist()] = own
+    column.nz[at.tolist()] = ca.densify(terms)
+    return (*merged, column)
 
 
 def _compile(model: Component, name: str | None, dimensions: bool = True) -> CompiledModel:
