@@ -63,23 +63,26 @@ def _external_blocks(model: Component) -> list[dict]:
 
 
 def _read_through(column: ca.SX, rep: np.ndarray, scale: np.ndarray,
-                  kept: np.ndarray) -> ca.SX:
+                  kept: np.ndarray, out: ca.SX | None = None,
+                  place: np.ndarray | None = None) -> ca.SX:
     """Each variable read through alias elimination, ``scale * column[rep]`` where
     ``kept``, else the constant ``scale``: rows of ``column`` gathered and put in place by
     slices of a column of zeros (a sign where one is -1, a product where the factor is
-    another number), not a sparse product and its densification (a sixth of the cost)."""
-    out = ca.SX.zeros(len(rep))
+    another number), not a sparse product and its densification (a sixth of the cost).
+    Written into rows ``place`` of ``out`` when given (else a new column of them alone)."""
+    if out is None:
+        out, place = ca.SX.zeros(len(rep)), np.arange(len(rep))
     unit = kept & (scale == 1.0)
     for at, sign in ((np.flatnonzero(unit), 1.0),
                      (np.flatnonzero(kept & (scale == -1.0)), -1.0),
                      (np.flatnonzero(kept & ~unit & (scale != -1.0)), None)):
         if at.size:
             part = column[rep[at].tolist()]
-            out.nz[at.tolist()] = part if sign == 1.0 else -part if sign == -1.0 else \
-                part * ca.DM(scale[at].tolist())
+            out.nz[place[at].tolist()] = part if sign == 1.0 else -part if sign == -1.0 \
+                else part * ca.DM(scale[at].tolist())
     fixed = np.flatnonzero(~kept)
     if fixed.size:
-        out.nz[fixed.tolist()] = ca.DM(scale[fixed].tolist())
+        out.nz[place[fixed].tolist()] = ca.DM(scale[fixed].tolist())
     return out
 
 
@@ -113,9 +116,8 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     position = np.array([f[3] for f in folded], dtype=np.intp)
     var_row = np.arange(n) + np.searchsorted(position, np.arange(n), side="right")
     kept = rep >= 0
-    own = _read_through(flat.stack_variables(), rep, scale, kept)
     if not folded:
-        return names, units, docs, own
+        return names, units, docs, _read_through(flat.stack_variables(), rep, scale, kept)
     # the folded variables' rows among the model's, then their terms in bulk: one sparse
     # product for those rows alone, the model's variables put in place around them
     n_f = len(folded)
@@ -149,8 +151,7 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         terms = terms + ca.DM.triplet(nonzero.tolist(), [0] * len(nonzero),
                                       ca.DM(constant[nonzero].tolist()), n_f, 1)
     column = ca.SX.zeros(n + n_f)
-    if n:
-        column.nz[var_row.tolist()] = own
+    _read_through(flat.stack_variables(), rep, scale, kept, column, var_row)
     column.nz[at.tolist()] = ca.densify(terms)
     return (*merged, column)
 
@@ -213,9 +214,12 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     unknown_col = flat.stack_rows(unknown_rows.tolist())
     # each unknown's derivative symbol (None if it has none) and theirs stacked: by row
     # when the class templates made them, else by name (a vertcat of scalars)
+    def by_name() -> list:
+        return [ctx.derivative.get(n) for n in alias.unknowns]
+
     by_row = flat.derivatives_by_row(unknown_rows.tolist())
     if by_row is None:
-        der_of = [ctx.derivative.get(n) for n in alias.unknowns]
+        der_of = by_name()
         der_syms = [d for d in der_of if d is not None]
         der_col = ca.vertcat(*der_syms) if der_syms else ca.SX(0, 1)
     else:
@@ -226,7 +230,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     n_der = len(ctx.derivative)
     plan = prepare_events(flat, alias, relations)
     if len(ctx.derivative) != n_der:      # an event made a derivative: read them again
-        der_of = [ctx.derivative.get(n) for n in alias.unknowns]
+        der_of = by_name()
         stacked = None
     lap("relations")
 
