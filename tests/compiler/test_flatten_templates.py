@@ -426,3 +426,84 @@ def test_origins_are_formed_when_read_and_read_as_the_equations_own(build, monke
         seq.insert(1, "inserted")
         del seq[3]
     assert [str(o) for o in mine] == [str(o) for o in ref]
+
+
+def _eager(monkeypatch):
+    """Class templates form every instance's residuals during flattening, on the
+    instances' own variables (alias elimination then substitutes them), as before
+    residuals were deferred."""
+    monkeypatch.setattr(fl._Template, "defer",
+                        lambda self, flat: self.instantiate(flat))
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(4), drive, stop_and_springs])
+def test_residuals_formed_on_alias_replacements_equal_the_substituted_ones(build,
+                                                                          monkeypatch):
+    """A class template's residuals are formed once, by alias elimination, on its
+    instances' arguments with the eliminated variables replaced, and only the rows
+    some instance keeps: the same residuals, expression for expression, as forming
+    all of them on the variables and substituting."""
+    deferred = fl.flatten(build())
+    pending = deferred.__dict__["_pending_templates"]
+    assert pending and all(t.column is None for t in pending)
+    a = eliminate_aliases(deferred)
+    assert all(t.column is not None or t.pending is None for t in pending)
+    # the rows that are aliases are never formed
+    assert any(t.kept is not None and len(t.kept) < t.n_eq for t in pending)
+    _eager(monkeypatch)
+    eager = fl.flatten(build())
+    assert "_pending_templates" not in eager.__dict__
+    b = eliminate_aliases(eager)
+    assert a.unknowns == b.unknowns and a.eliminated == b.eliminated
+    assert a.stacked.shape == b.stacked.shape
+    # expression for expression (the two flattenings made symbols of their own)
+    assert [str(r) for r in ca.vertsplit(a.stacked)] == \
+        [str(r) for r in ca.vertsplit(b.stacked)]
+    # and value for value, each symbol given a value by its name
+    xa, xb = ca.symvar(a.stacked), ca.symvar(b.stacked)
+    assert sorted(s.name() for s in xa) == sorted(s.name() for s in xb)
+    rng = np.random.default_rng(11)
+    point = {s.name(): rng.uniform(0.5, 2.0) for s in xa}
+    va = ca.Function("a", xa, [a.stacked])(*[point[s.name()] for s in xa])
+    vb = ca.Function("b", xb, [b.stacked])(*[point[s.name()] for s in xb])
+    np.testing.assert_array_equal(np.asarray(va), np.asarray(vb))
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(4), drive, stop_and_springs])
+def test_a_model_compiles_the_same_with_residuals_formed_early_or_late(build, monkeypatch):
+    late = mt.compile_model(build())
+    _eager(monkeypatch)
+    early = mt.compile_model(build())
+    assert late.state_names == early.state_names and late.alg_names == early.alg_names
+    assert late.names == early.names
+    rng = np.random.default_rng(12)
+    for name in ("f_ode", "f_alg", "f_out"):
+        fa, fb = getattr(late, name), getattr(early, name)
+        args = [rng.uniform(0.5, 1.5, fa.size_in(i)) for i in range(fa.n_in())]
+        np.testing.assert_array_equal(np.asarray(fa(*args)), np.asarray(fb(*args)),
+                                      err_msg=name)
+
+
+def test_reading_a_deferred_residual_forms_its_class_and_the_check_does_not():
+    """A residual read before alias elimination (a message, a test) forms its class's
+    column on the instances' own variables; the dimension check reads the first
+    instance only and forms no column."""
+    from mechatron.compiler.dimensions import dimension_problems
+    flat = fl.flatten(ladder(3))
+    pending = flat.__dict__["_pending_templates"]
+    assert dimension_problems(flat) == []
+    assert all(t.column is None for t in pending)
+    eq = next(e for e in flat.equations if isinstance(e, fl._TemplateEquation)
+              and e.row >= e.template.n_eq)
+    r = eq.residual
+    assert eq.template.column is not None and eq.template.kept is None
+    instance, k = divmod(eq.row, eq.template.n_eq)
+    own = ca.vertcat(*eq.template.symbols(eq.template.instances[instance]))
+    want = eq.template.fun(own)[k]
+    x = ca.symvar(ca.vertcat(r, want))
+    point = np.random.default_rng(13).uniform(0.5, 2.0, len(x))
+    got = ca.Function("f", x, [r, want])(*point)
+    assert float(got[0]) == float(got[1])
+    # alias elimination then forms the others and takes the formed one as it is
+    eliminate_aliases(flat)
+    assert all(t.pending is None for t in pending)

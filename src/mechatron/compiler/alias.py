@@ -24,7 +24,8 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.flatten import (ColumnRows, FlatEquation, FlatModel, Origins,
-                                       stack_columns, stack_residuals)
+                                       _TemplateEquation, _gather, stack_columns,
+                                       stack_residuals)
 from mechatron.errors import InitializationError
 
 __all__ = ["AliasResult", "eliminate_aliases"]
@@ -180,17 +181,26 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     origins = Origins(kept)                 # each formed when read (messages)
     owners = list(map(_OWNER, kept))
     n_before = len(flat.equations) + len(flat.aliases)
+    # class templates whose residuals are not formed yet: formed below on the
+    # replacements, only the rows kept (see `flatten._Template.defer`)
+    pending = [t for t in flat.__dict__.pop("_pending_templates", ())
+               if t.pending is not None]
     # the kept residuals stacked: a class template's rows gathered from its column
-    stacked = stack_residuals(kept) if kept else None
+    stacked = stack_residuals(kept) if kept and not pending else None
     result = AliasResult([], origins, owners, [], n_before=n_before)
+    old = new = None
     if n:
         # the numbers of the differentiated variables, read by both steps below
         derived = _differentiated(flat, index, n)
         gone = _classes(flat, names, index, parent, factor, const, result, derived)
         old, new = _replacements(flat, names, index, gone, result, derived) if kept \
             else (None, None)
-        if old is not None:
+        if old is not None and stacked is not None:
             stacked = ca.substitute(stacked, old, new)
+    if pending:
+        stacked = _formed(kept, pending, flat, old, new) if kept else None
+        for tpl in pending:
+            tpl.pending = None
     # the union-find is done: the numbering lives on in `result.eliminated` (read with
     # `get` alone), its forest and factors (a number and a float per variable) do not
     index.parent = index.factor = None
@@ -369,6 +379,44 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
             _merge_starts(result, flat, names[b],
                           [(names[j], float(f[j] / f[b]), records[j]) for j in members])
     return gone
+
+
+def _formed(kept: list, pending: list, flat, old, new) -> ca.SX:
+    """The residuals of ``kept`` stacked, with ``old`` replaced by ``new``: the
+    templates of ``pending`` formed on their instances' replaced arguments, each with
+    only the rows some instance keeps, and the other residuals substituted at once."""
+    waiting = {id(t): t for t in pending}
+    rows: dict = {}                  # id(template) -> its rows that are kept
+    others = []
+    for eq in kept:
+        if type(eq) is _TemplateEquation and id(eq.template) in waiting:
+            rows.setdefault(id(eq.template), set()).add(eq.row % eq.template.n_eq)
+        else:
+            others.append(eq)
+    place = {}                       # id(template) -> (column, n_eq, rows kept, where)
+    for key, tpl in waiting.items():
+        if key in rows:
+            keep = sorted(rows[key])
+            tpl.instantiate(flat, old, new, keep)
+            at = [-1] * tpl.n_eq
+            for j, k in enumerate(keep):
+                at[k] = j
+            place[key] = (tpl.column, tpl.n_eq, len(tpl.kept or at), at)
+    rest = stack_residuals(others) if others else None
+    if rest is not None and old is not None:
+        rest = ca.substitute(rest, old, new)
+    items = []
+    j = 0
+    for eq in kept:
+        got = place.get(id(eq.template)) if type(eq) is _TemplateEquation else None
+        if got is None:
+            items.append((rest, j))
+            j += 1
+        else:
+            column, n_eq, m, at = got
+            instance, k = divmod(eq.row, n_eq)
+            items.append((column, instance * m + at[k]))
+    return _gather(items)
 
 
 def _differentiated(flat, index, n: int) -> list[int]:

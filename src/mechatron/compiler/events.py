@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
+from mechatron.compiler.flatten import _TemplateEquation
 from mechatron.compiler.relations import Relation, _rebuild
 from mechatron.core.events import MAX_ROUNDS, Clock, Reinit, SampleCondition
 from mechatron.errors import StructuralError
@@ -104,8 +105,11 @@ def replace_pre(flat) -> None:
         return
     old = list(ctx.pre.values())
     new = [ctx.unknowns[name] for name in ctx.pre]
+    # a class template's equations hold no pre() (see `flatten._Template`): their
+    # residuals are not formed for this
     eqs = [eq for eq in flat.equations + flat.initial_equations
-           if ca.depends_on(eq.residual, ca.vertcat(*old))]
+           if type(eq) is not _TemplateEquation
+           and ca.depends_on(eq.residual, ca.vertcat(*old))]
     if eqs:
         res = ca.substitute([eq.residual for eq in eqs], old, new)
         for eq, r in zip(eqs, res):

@@ -388,10 +388,11 @@ class _TemplateEquation(FlatEquation):
     def residual(self):
         r = _RESIDUAL_SLOT.__get__(self)
         if r is None:
-            column = self.template.column
+            tpl = self.template
+            column = tpl.formed()
             if column is None:                  # not instantiated yet
                 return None
-            r = column[self.row]
+            r = column[tpl.kept_row(self.row)]
             _RESIDUAL_SLOT.__set__(self, r)
         return r
 
@@ -524,11 +525,22 @@ def stack_residuals(eqs) -> ca.SX:
     """``vertcat`` of the residuals of ``eqs``: the rows of template equations and flow
     sums gathered from their columns by one index (a residual set since, e.g. by `pre`'s
     replacement, is taken as it is), the others stacked."""
-    return _gather((eq.template.column, eq.row)
+    return _gather(_template_row(eq)
                    if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None
                    else (eq.column, eq.row)
                    if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None
                    else (None, eq.residual) for eq in eqs)
+
+
+def _template_row(eq) -> tuple:
+    """``(column, row)`` of a template equation's residual: a row of the first instance
+    of a template not formed yet is read off that instance alone (the dimension check
+    reads no other), any other from the column of all instances."""
+    tpl = eq.template
+    if tpl.column is None and eq.row < tpl.n_eq:
+        return tpl.first_rows(), eq.row
+    column = tpl.formed()
+    return column, tpl.kept_row(eq.row)
 
 
 def stack_columns(*parts: ca.SX) -> ca.SX:
@@ -773,6 +785,9 @@ def _declaration_order(flat: FlatModel) -> None:
     late = flat.__dict__.pop("_late", None)
     if not late:
         return
+    # the instances of class templates read their variables by rows of the old order
+    for tpl in flat.__dict__.pop("_pending_templates", ()):
+        tpl.formed()
     # rows of differentiated variables in the old order (see `_Template.add`): moved below
     der_rows = flat.__dict__.pop("_derivative_rows", None)
     der_bulk = flat.__dict__.pop("_derivative_bulk", None)
@@ -1436,7 +1451,7 @@ def _collect_equations(flat: FlatModel, elements, problems,
                 _add_equation(flat, el, klass, k, item, problems)
     for tpl in templates.values():
         if tpl is not None:
-            tpl.instantiate(flat)
+            tpl.defer(flat)
     _discrete_states(flat, problems)
     pending = [eq for eq in flat.equations
                if type(eq) is not _TemplateEquation and eq.residual is None]
@@ -1506,7 +1521,8 @@ class _Template:
                  "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
                  "row_hints", "row_bases", "column", "var_column", "model_name",
-                 "slots", "slot_keys", "der_rows", "der_column", "row_span", "par_column")
+                 "slots", "slot_keys", "der_rows", "der_column", "row_span", "par_column",
+                 "pending", "kept", "first")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=(), model_name=""):
@@ -1522,6 +1538,13 @@ class _Template:
         self.paths: list = []       # each instance's path
         #: every instance's residuals stacked, instance after instance (`instantiate`)
         self.column: ca.SX | None = None
+        #: the model whose variables the instances read, while their residuals are not
+        #: formed yet: alias elimination forms them from its replacements (`defer`)
+        self.pending: FlatModel | None = None
+        #: the rows of one instance that `column` holds (None: all, see `kept_row`)
+        self.kept: list | None = None
+        #: the first instance's residuals alone, for the dimension check (`first_rows`)
+        self.first: ca.SX | None = None
         #: the column of the variables that instances' rows refer to (see `add`)
         self.var_column: ca.SX | None = None
         self.model_name = model_name   # where an equation of the root is
@@ -1675,8 +1698,47 @@ class _Template:
         flat.equations += [_TemplateEquation(self, owner, hint, row) for row, hint
                            in zip(_integers(shared, last - 1)[first:last], hints)]
 
-    def instantiate(self, flat: FlatModel) -> None:
-        """Every instance's residuals from one call of the mapped function."""
+    def defer(self, flat: FlatModel) -> None:
+        """Leave the instances' residuals unformed until something reads them: alias
+        elimination forms them once, on its replacements of the instances' variables
+        (`instantiate` with ``old``, ``new``), and only the rows it keeps. Formed on
+        the variables themselves and substituted afterwards, every residual would be
+        built twice, the whole model's graph walked once more, and the first graph
+        freed."""
+        if self.instances and self.n_eq and self.column is None:
+            self.pending = flat
+            flat.__dict__.setdefault("_pending_templates", []).append(self)
+
+    def formed(self) -> ca.SX | None:
+        """`column`, formed on the instances' own variables if it was deferred."""
+        if self.column is None and self.pending is not None:
+            self.instantiate(self.pending)
+        return self.column
+
+    def first_rows(self) -> ca.SX:
+        """The first instance's residuals (rows ``0 .. n_eq - 1`` of `column`), without
+        forming the others."""
+        if self.column is not None and self.kept is None:
+            return self.column
+        if self.first is None:
+            self.first = self.fun(ca.vertcat(*self.symbols(self.instances[0])))
+        return self.first
+
+    def kept_row(self, row: int) -> int:
+        """Where the residual of equation ``row`` (instance after instance, `n_eq`
+        each) is in `column`, which may hold some of each instance's rows only."""
+        if self.kept is None:
+            return row
+        instance, k = divmod(row, self.n_eq)
+        return instance * len(self.kept) + self.kept.index(k)
+
+    def instantiate(self, flat: FlatModel, old: ca.SX | None = None,
+                    new: ca.SX | None = None, rows: list | None = None) -> None:
+        """Every instance's residuals from one call of the mapped function; with
+        ``old`` and ``new``, on the instances' arguments with ``old`` replaced by
+        ``new`` (alias elimination's replacements), and with ``rows`` (sorted), only
+        those rows of each instance."""
+        self.pending = None
         n = len(self.instances)
         if not n or not self.n_eq:
             return
@@ -1687,6 +1749,12 @@ class _Template:
             fun, inputs = self.fun, [ca.reshape(ca.vertcat(*flat_args), width, n)]
         else:
             fun, inputs = self._split(*parts)
+        if old is not None:
+            inputs = ca.substitute(inputs, [old], [new])
+        if rows is not None and len(rows) < self.n_eq:
+            args = fun.sx_in()
+            fun = ca.Function("template_rows", args, [fun(*args)[rows]])
+            self.kept = list(rows)
         out = fun.map(n)(*inputs) if n > 1 else fun(*inputs)
         self.column = ca.vec(out)       # column-major: instance after instance
 
@@ -1707,7 +1775,7 @@ class _Template:
         """Let go of what only instantiation and alias elimination read (the residuals
         of every instance, before alias substitution, and the rows of the instances'
         elements); what messages read stays (`_TemplateOrigin`)."""
-        self.column = None
+        self.column = self.pending = self.first = None
         self.bases = []
 
     def symbols(self, args: list) -> list:
