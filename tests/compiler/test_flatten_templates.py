@@ -449,7 +449,9 @@ def test_residuals_formed_on_alias_replacements_equal_the_substituted_ones(build
     a = eliminate_aliases(deferred)
     assert all(t.column is not None or t.pending is None for t in pending)
     # the rows that are aliases are never formed
-    assert any(t.kept is not None and len(t.kept) < t.n_eq for t in pending)
+    formed = [t for t in pending if t.column is not None]
+    assert formed and all(t.replaced for t in formed)
+    assert any(t.column.numel() < t.n_eq * len(t.instances) for t in formed)
     _eager(monkeypatch)
     eager = fl.flatten(build())
     assert "_pending_templates" not in eager.__dict__
@@ -496,7 +498,7 @@ def test_reading_a_deferred_residual_forms_its_class_and_the_check_does_not():
     eq = next(e for e in flat.equations if isinstance(e, fl._TemplateEquation)
               and e.row >= e.template.n_eq)
     r = eq.residual
-    assert eq.template.column is not None and eq.template.kept is None
+    assert eq.template.column is not None and not eq.template.replaced
     instance, k = divmod(eq.row, eq.template.n_eq)
     own = ca.vertcat(*eq.template.symbols(eq.template.instances[instance]))
     want = eq.template.fun(own)[k]
@@ -507,3 +509,16 @@ def test_reading_a_deferred_residual_forms_its_class_and_the_check_does_not():
     # alias elimination then forms the others and takes the formed one as it is
     eliminate_aliases(flat)
     assert all(t.pending is None for t in pending)
+
+
+def test_a_residual_read_after_alias_elimination_is_the_one_written():
+    """After alias elimination a class's column holds its residuals with the variables
+    replaced, and only the rows kept; each equation still reads its residual as
+    written, on its instance's variables, whether kept or eliminated."""
+    flat = fl.flatten(ladder(3))
+    written = fl.flatten(ladder(3))
+    eliminate_aliases(flat)
+    pairs = [(a, b) for a, b in zip(flat.equations, written.equations)
+             if isinstance(a, fl._TemplateEquation)]
+    assert any(a.template.replaced for a, _ in pairs)
+    assert [str(a.residual) for a, _ in pairs] == [str(b.residual) for _, b in pairs]

@@ -199,8 +199,8 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             stacked = ca.substitute(stacked, old, new)
     if pending:
         stacked = _formed(kept, pending, flat, old, new) if kept else None
-        for tpl in pending:
-            tpl.pending = None
+        for tpl in pending:     # a residual read now is formed as written, alone
+            tpl.pending, tpl.replaced = None, True
     # the union-find is done: the numbering lives on in `result.eliminated` (read with
     # `get` alone), its forest and factors (a number and a float per variable) do not
     index.parent = index.factor = None
@@ -393,7 +393,7 @@ def _formed(kept: list, pending: list, flat, old, new) -> ca.SX:
             rows.setdefault(id(eq.template), set()).add(eq.row % eq.template.n_eq)
         else:
             others.append(eq)
-    place = {}                       # id(template) -> (column, n_eq, rows kept, where)
+    place = {}     # id(template) -> (its column, n_eq, rows kept, each row's place)
     for key, tpl in waiting.items():
         if key in rows:
             keep = sorted(rows[key])
@@ -401,7 +401,7 @@ def _formed(kept: list, pending: list, flat, old, new) -> ca.SX:
             at = [-1] * tpl.n_eq
             for j, k in enumerate(keep):
                 at[k] = j
-            place[key] = (tpl.column, tpl.n_eq, len(tpl.kept or at), at)
+            place[key] = (tpl.column, tpl.n_eq, len(keep), at)
     rest = stack_residuals(others) if others else None
     if rest is not None and old is not None:
         rest = ca.substitute(rest, old, new)

@@ -389,10 +389,13 @@ class _TemplateEquation(FlatEquation):
         r = _RESIDUAL_SLOT.__get__(self)
         if r is None:
             tpl = self.template
-            column = tpl.formed()
-            if column is None:                  # not instantiated yet
-                return None
-            r = column[tpl.kept_row(self.row)]
+            if tpl.replaced:        # its column holds residuals after alias elimination
+                r = tpl.own_row(self.row)
+            else:
+                column = tpl.formed()
+                if column is None:                  # not instantiated yet
+                    return None
+                r = column[self.row]
             _RESIDUAL_SLOT.__set__(self, r)
         return r
 
@@ -537,10 +540,11 @@ def _template_row(eq) -> tuple:
     of a template not formed yet is read off that instance alone (the dimension check
     reads no other), any other from the column of all instances."""
     tpl = eq.template
+    if tpl.replaced:
+        return None, tpl.own_row(eq.row)
     if tpl.column is None and eq.row < tpl.n_eq:
         return tpl.first_rows(), eq.row
-    column = tpl.formed()
-    return column, tpl.kept_row(eq.row)
+    return tpl.formed(), eq.row
 
 
 def stack_columns(*parts: ca.SX) -> ca.SX:
@@ -1522,7 +1526,7 @@ class _Template:
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
                  "row_hints", "row_bases", "column", "var_column", "model_name",
                  "slots", "slot_keys", "der_rows", "der_column", "row_span", "par_column",
-                 "pending", "kept", "first")
+                 "pending", "replaced", "first")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
                  par_slots=(), model_name=""):
@@ -1541,8 +1545,10 @@ class _Template:
         #: the model whose variables the instances read, while their residuals are not
         #: formed yet: alias elimination forms them from its replacements (`defer`)
         self.pending: FlatModel | None = None
-        #: the rows of one instance that `column` holds (None: all, see `kept_row`)
-        self.kept: list | None = None
+        #: whether alias elimination formed the residuals (`column` then holds its
+        #: replacements and the rows it keeps, if any): each residual as written is
+        #: then formed alone when read (`own_row`)
+        self.replaced = False
         #: the first instance's residuals alone, for the dimension check (`first_rows`)
         self.first: ca.SX | None = None
         #: the column of the variables that instances' rows refer to (see `add`)
@@ -1716,21 +1722,20 @@ class _Template:
         return self.column
 
     def first_rows(self) -> ca.SX:
-        """The first instance's residuals (rows ``0 .. n_eq - 1`` of `column`), without
-        forming the others."""
-        if self.column is not None and self.kept is None:
+        """The first instance's residuals as written (rows ``0 .. n_eq - 1`` of the
+        column of all), without forming the others."""
+        if self.column is not None and not self.replaced:
             return self.column
         if self.first is None:
             self.first = self.fun(ca.vertcat(*self.symbols(self.instances[0])))
         return self.first
 
-    def kept_row(self, row: int) -> int:
-        """Where the residual of equation ``row`` (instance after instance, `n_eq`
-        each) is in `column`, which may hold some of each instance's rows only."""
-        if self.kept is None:
-            return row
+    def own_row(self, row: int) -> ca.SX:
+        """The residual of equation ``row`` as written, on its instance's variables."""
         instance, k = divmod(row, self.n_eq)
-        return instance * len(self.kept) + self.kept.index(k)
+        if instance == 0:
+            return self.first_rows()[k]
+        return self.fun(ca.vertcat(*self.symbols(self.instances[instance])))[k]
 
     def instantiate(self, flat: FlatModel, old: ca.SX | None = None,
                     new: ca.SX | None = None, rows: list | None = None) -> None:
@@ -1751,10 +1756,11 @@ class _Template:
             fun, inputs = self._split(*parts)
         if old is not None:
             inputs = ca.substitute(inputs, [old], [new])
+            self.replaced = True
         if rows is not None and len(rows) < self.n_eq:
             args = fun.sx_in()
             fun = ca.Function("template_rows", args, [fun(*args)[rows]])
-            self.kept = list(rows)
+            self.replaced = True
         out = fun.map(n)(*inputs) if n > 1 else fun(*inputs)
         self.column = ca.vec(out)       # column-major: instance after instance
 
@@ -1776,6 +1782,7 @@ class _Template:
         of every instance, before alias substitution, and the rows of the instances'
         elements); what messages read stays (`_TemplateOrigin`)."""
         self.column = self.pending = self.first = None
+        self.replaced = False
         self.bases = []
 
     def symbols(self, args: list) -> list:
