@@ -185,8 +185,6 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     # replacements, only the rows kept (see `flatten._Template.defer`)
     pending = [t for t in flat.__dict__.pop("_pending_templates", ())
                if t.pending is not None]
-    # the kept residuals stacked: a class template's rows gathered from its column
-    stacked = stack_residuals(kept) if kept and not pending else None
     result = AliasResult([], origins, owners, [], n_before=n_before)
     old = new = None
     if n:
@@ -195,12 +193,9 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         gone = _classes(flat, names, index, parent, factor, const, result, derived)
         old, new = _replacements(flat, names, index, gone, result, derived) if kept \
             else (None, None)
-        if old is not None and stacked is not None:
-            stacked = ca.substitute(stacked, old, new)
-    if pending:
-        stacked = _formed(kept, pending, flat, old, new) if kept else None
-        for tpl in pending:     # a residual read now is formed as written, alone
-            tpl.pending, tpl.replaced = None, True
+    stacked = _kept_residuals(kept, pending, flat, old, new) if kept else None
+    for tpl in pending:     # a residual read now is formed as written, alone
+        tpl.pending, tpl.replaced = None, True
     # the union-find is done: the numbering lives on in `result.eliminated` (read with
     # `get` alone), its forest and factors (a number and a float per variable) do not
     index.parent = index.factor = None
@@ -381,10 +376,11 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     return gone
 
 
-def _formed(kept: list, pending: list, flat, old, new) -> ca.SX:
-    """The residuals of ``kept`` stacked, with ``old`` replaced by ``new``: the
-    templates of ``pending`` formed on their instances' replaced arguments, each with
-    only the rows some instance keeps, and the other residuals substituted at once."""
+def _kept_residuals(kept: list, pending: list, flat, old, new) -> ca.SX:
+    """The residuals of ``kept`` stacked (a class template's rows gathered from its
+    column), with ``old`` replaced by ``new`` (if any): the templates of ``pending``
+    formed on their instances' replaced arguments, each with only the rows some
+    instance keeps, and the other residuals substituted at once."""
     waiting = {id(t): t for t in pending}
     rows: dict = {}                  # id(template) -> its rows that are kept
     others = []
@@ -405,6 +401,8 @@ def _formed(kept: list, pending: list, flat, old, new) -> ca.SX:
     rest = stack_residuals(others) if others else None
     if rest is not None and old is not None:
         rest = ca.substitute(rest, old, new)
+    if not place:                   # no template formed here: every residual is rest
+        return rest
     items = []
     j = 0
     for eq in kept:

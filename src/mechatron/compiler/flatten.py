@@ -389,13 +389,11 @@ class _TemplateEquation(FlatEquation):
         r = _RESIDUAL_SLOT.__get__(self)
         if r is None:
             tpl = self.template
-            if tpl.replaced:        # its column holds residuals after alias elimination
-                r = tpl.own_row(self.row)
-            else:
-                column = tpl.formed()
-                if column is None:                  # not instantiated yet
-                    return None
-                r = column[self.row]
+            if tpl.column is None and tpl.pending is None and not tpl.replaced:
+                return None                     # not instantiated, or let go
+            column, r = _template_row(self)
+            if column is not None:
+                r = column[r]
             _RESIDUAL_SLOT.__set__(self, r)
         return r
 

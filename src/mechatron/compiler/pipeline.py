@@ -91,10 +91,9 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     the unknowns, formed in bulk (no CasADi call per variable): the model's variables by
     `_read_through`, the variables of folded ports (sums) as one sparse matrix times the
     model's stacked variable symbols plus constants, put in place between them. Each is
-    a sum of model
-    variables read through alias elimination (a variable removed by it is a scaled
-    representative or a constant): a model variable the sum of itself, a variable of a
-    folded subsystem port (:mod:`mechatron.compiler.folding`) that of its terms, logged
+    a sum of model variables read through alias elimination (a variable removed by it is
+    a scaled representative or a constant): a model variable the sum of itself, a
+    variable of a folded subsystem port (:mod:`mechatron.compiler.folding`) that of its terms, logged
     where its port is declared.
 
     The rows of the model's variables come from alias elimination's arrays for all of
