@@ -1725,15 +1725,17 @@ class _Template:
         if self.column is not None and not self.replaced:
             return self.column
         if self.first is None:
-            self.first = self.fun(ca.vertcat(*self.symbols(self.instances[0])))
+            self.first = self._written(0)
         return self.first
 
     def own_row(self, row: int) -> ca.SX:
         """The residual of equation ``row`` as written, on its instance's variables."""
         instance, k = divmod(row, self.n_eq)
-        if instance == 0:
-            return self.first_rows()[k]
-        return self.fun(ca.vertcat(*self.symbols(self.instances[instance])))[k]
+        return (self.first_rows() if instance == 0 else self._written(instance))[k]
+
+    def _written(self, instance: int) -> ca.SX:
+        """The residuals of instance ``instance`` as written, formed alone."""
+        return self.fun(ca.vertcat(*self.symbols(self.instances[instance])))
 
     def instantiate(self, flat: FlatModel, old: ca.SX | None = None,
                     new: ca.SX | None = None, rows: list | None = None) -> None:
