@@ -2136,47 +2136,50 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
         nodes = [cset.members for cset in sets if not cset.is_signal]
     _flow_sums(flat, flow_sums)
     # what inside_connected(sets) | tried holds (port_key of each port connected from
-    # outside its component), connectors by id and signals by key; and the ports
-    # wired inside their own component
-    connected_ports: set[int] = set()
+    # outside its component): connectors marked on themselves (`_mark`, not a set of
+    # every port's identity), signals by key; and the ports wired inside their own
+    # component
     connected: set[tuple] = set()
     wired_inside: set[tuple] = set()
-    for cset in sets:
-        for m in cset.members:
-            if m.outside:
-                wired_inside.add(port_key(m.port))
-            elif isinstance(m.port, SignalRef):
-                connected.add(port_key(m.port))
-            else:
-                connected_ports.add(id(m.port))
-    for key in tried:
-        if key[0] == "port":
-            connected_ports.add(key[1])
-        else:
-            connected.add(key)
-    for el in elements:
-        if isinstance(el, Connector):
-            if id(el) in connected_ports:
-                continue
-            owner = el._parent
-            if planned and (id(el) in folded or id(owner._parent) in planned):
-                continue            # folded, or wired inside a planned subsystem
-            if planned and id(owner) in planned:
-                _open_port(flat, el)    # a planned port an equation reads, open outside
-                continue
-            if el._parent is model or port_key(el) in wired_inside:
-                # a port of the model, or of a subsystem wired to its parts, left open
-                # outside: nothing flows through it
-                _open_port(flat, el)
-                continue
-            problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
-                            "or remove the component. "
-                            f"{_hint(el)}".rstrip())
-        elif el is not model:       # a component; the root's inputs: external inputs
-            for key in _input_keys(type(el)):
-                if port_key(SignalRef(el, key)) not in connected:
-                    problems.append(f"signal input '{_join(el.path, key)}' is not "
-                                    "connected. Connect a source, e.g. blocks.Constant.")
+    marked: list[Connector] = []
+    try:
+        for cset in sets:
+            for m in cset.members:
+                if m.outside:
+                    wired_inside.add(port_key(m.port))
+                elif isinstance(m.port, SignalRef):
+                    connected.add(port_key(m.port))
+                elif m.port._mark is None:
+                    m.port._mark = True
+                    marked.append(m.port)
+        tried_ports = {key[1] for key in tried if key[0] == "port"}
+        connected.update(key for key in tried if key[0] != "port")
+        for el in elements:
+            if isinstance(el, Connector):
+                if el._mark or (tried_ports and id(el) in tried_ports):
+                    continue
+                owner = el._parent
+                if planned and (id(el) in folded or id(owner._parent) in planned):
+                    continue            # folded, or wired inside a planned subsystem
+                if planned and id(owner) in planned:
+                    _open_port(flat, el)    # a planned port an equation reads, open outside
+                    continue
+                if el._parent is model or port_key(el) in wired_inside:
+                    # a port of the model, or of a subsystem wired to its parts, left open
+                    # outside: nothing flows through it
+                    _open_port(flat, el)
+                    continue
+                problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect "
+                                "it, or remove the component. "
+                                f"{_hint(el)}".rstrip())
+            elif el is not model:       # a component; the root's inputs: external inputs
+                for key in _input_keys(type(el)):
+                    if port_key(SignalRef(el, key)) not in connected:
+                        problems.append(f"signal input '{_join(el.path, key)}' is not "
+                                        "connected. Connect a source, e.g. blocks.Constant.")
+    finally:
+        for port in marked:
+            port._mark = None
     _check_references(flat, model, elements, nodes, problems)
 
 
