@@ -8,9 +8,7 @@ import pytest
 import mechatron as mt
 from mechatron.core import Across, Component, Connector, Through
 from mechatron.core.domains import ELECTRICAL
-from mechatron.errors import ModelError
 from mechatron.library import electrical as el
-from tests.compiler.test_flatten_templates import ladder
 
 
 class ThroughFirstPin(Connector, domain=ELECTRICAL):
@@ -100,36 +98,3 @@ def test_a_subsystem_port_of_another_connector_class_carries_its_own_variables()
     np.testing.assert_allclose(res["w.p.i"], current, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(res["w.n.v"], v_c, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(res["w.n.i"], -current, rtol=1e-5, atol=1e-7)
-
-
-def _elements(model):
-    from mechatron.compiler.flatten import _walk
-    return list(_walk(model))
-
-
-def test_ports_are_numbered_on_themselves_and_left_as_found():
-    """Connection sets, networks and the open-port check number each port on itself
-    (`Element._mark`): after a compile, and after one that fails, every element's mark
-    is cleared, its attribute dictionary keeps the size it shares with its class, and
-    the model compiles again to the same result."""
-    import sys
-
-    model = ladder(6)
-    elements = _elements(model)
-    sizes = [sys.getsizeof(e.__dict__) for e in elements]
-    first = mt.compile_model(model)
-    assert all(e._mark is None for e in elements)
-    assert [sys.getsizeof(e.__dict__) for e in elements] == sizes
-    again = mt.compile_model(model)
-    assert again.state_names == first.state_names
-    assert again.names == first.names
-
-    broken = rc(False)
-    broken.add("c2", el.Capacitor(C=1.0))
-    broken.connect(broken.c.p, broken.c2.p)      # c2.n left open
-    with pytest.raises(ModelError, match="c2.n"):
-        mt.compile_model(broken)
-    assert all(e._mark is None for e in _elements(broken))
-    broken.connect(broken.c2.n, broken.g.port)
-    assert len(mt.compile_model(broken).state_names) == \
-        len(mt.compile_model(rc(True)).state_names)     # c2 beside c, as there

@@ -872,17 +872,6 @@ def _gathered(records) -> ca.SX:
                    else (None, v.sym) for v in records)
 
 
-def _parameter_rows_of(el, state: dict) -> list | None:
-    """The rows of ``el``'s parameters in the column of all parameters (see
-    `_bind_symbols`), or None if it has none there: held by its symbols when they were
-    bound in bulk (read off the element, not looked up by its identity in a dictionary
-    of every element), else looked up."""
-    syms = el._syms
-    if type(syms) is _ColumnSyms:
-        return syms.par_rows if syms.par_store is not None else None
-    return state.get("_parameter_rows", {}).get(id(el))
-
-
 class _ColumnSyms(dict):
     """The symbols of an element bound in bulk (its ``_syms``), each read from a column
     on first read: its variables' from the column of all variables (``offsets``: each
@@ -1514,7 +1503,7 @@ def _has_time_scales(cls) -> bool:
 
 # -- one expression graph per component class ------------------------------------------------
 _PLAIN_KEYS = frozenset(("doc", "_name", "_parent", "_values", "_starts", "_syms",
-                         "_mark", "_children", "_path_cache"))
+                         "_children", "_path_cache"))
 _TEMPLATE_PREFIX = "@"        # template symbols are named "@.<key>", "@.<port>.<key>"
 
 
@@ -1640,7 +1629,8 @@ class _Template:
             ints = _integers(shared, column.numel() - 1)
             # and each parameter slot laid out as bound (`par_slots`, the first ones)
             # the parameter's row in the column of the parameters, if it has one
-            prows = _parameter_rows_of(el, state) if self.par_slots else None
+            prows = state.get("_parameter_rows", {}).get(id(el)) if self.par_slots \
+                else None
             k = len(self.par_slots) if prows is not None else 0
             args = [ints[base[w] + x] if is_var else
                     prows[i] if i < k and prows[i] >= 0 else own[w][x]
@@ -1677,8 +1667,7 @@ class _Template:
         self.instances.append(args)
         self.paths.append(owner)
         if self.par_slots:
-            rows = _parameter_rows_of(el, state)
-            self.par_bases.append(-1 if rows is None else rows)
+            self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
         base = bases[-1 - len(self.ports):]
         if self.derived and self.var_rows is not None:
             # each differentiated variable's row among the model's variables (its
@@ -2136,50 +2125,47 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
         nodes = [cset.members for cset in sets if not cset.is_signal]
     _flow_sums(flat, flow_sums)
     # what inside_connected(sets) | tried holds (port_key of each port connected from
-    # outside its component): connectors marked on themselves (`_mark`, not a set of
-    # every port's identity), signals by key; and the ports wired inside their own
-    # component
+    # outside its component), connectors by id and signals by key; and the ports
+    # wired inside their own component
+    connected_ports: set[int] = set()
     connected: set[tuple] = set()
     wired_inside: set[tuple] = set()
-    marked: list[Connector] = []
-    try:
-        for cset in sets:
-            for m in cset.members:
-                if m.outside:
-                    wired_inside.add(port_key(m.port))
-                elif isinstance(m.port, SignalRef):
-                    connected.add(port_key(m.port))
-                elif m.port._mark is None:
-                    m.port._mark = True
-                    marked.append(m.port)
-        tried_ports = {key[1] for key in tried if key[0] == "port"}
-        connected.update(key for key in tried if key[0] != "port")
-        for el in elements:
-            if isinstance(el, Connector):
-                if el._mark or (tried_ports and id(el) in tried_ports):
-                    continue
-                owner = el._parent
-                if planned and (id(el) in folded or id(owner._parent) in planned):
-                    continue            # folded, or wired inside a planned subsystem
-                if planned and id(owner) in planned:
-                    _open_port(flat, el)    # a planned port an equation reads, open outside
-                    continue
-                if el._parent is model or port_key(el) in wired_inside:
-                    # a port of the model, or of a subsystem wired to its parts, left open
-                    # outside: nothing flows through it
-                    _open_port(flat, el)
-                    continue
-                problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect "
-                                "it, or remove the component. "
-                                f"{_hint(el)}".rstrip())
-            elif el is not model:       # a component; the root's inputs: external inputs
-                for key in _input_keys(type(el)):
-                    if port_key(SignalRef(el, key)) not in connected:
-                        problems.append(f"signal input '{_join(el.path, key)}' is not "
-                                        "connected. Connect a source, e.g. blocks.Constant.")
-    finally:
-        for port in marked:
-            port._mark = None
+    for cset in sets:
+        for m in cset.members:
+            if m.outside:
+                wired_inside.add(port_key(m.port))
+            elif isinstance(m.port, SignalRef):
+                connected.add(port_key(m.port))
+            else:
+                connected_ports.add(id(m.port))
+    for key in tried:
+        if key[0] == "port":
+            connected_ports.add(key[1])
+        else:
+            connected.add(key)
+    for el in elements:
+        if isinstance(el, Connector):
+            if id(el) in connected_ports:
+                continue
+            owner = el._parent
+            if planned and (id(el) in folded or id(owner._parent) in planned):
+                continue            # folded, or wired inside a planned subsystem
+            if planned and id(owner) in planned:
+                _open_port(flat, el)    # a planned port an equation reads, open outside
+                continue
+            if el._parent is model or port_key(el) in wired_inside:
+                # a port of the model, or of a subsystem wired to its parts, left open
+                # outside: nothing flows through it
+                _open_port(flat, el)
+                continue
+            problems.append(f"port '{el.path}' ({el.domain}) is not connected. Connect it, "
+                            "or remove the component. "
+                            f"{_hint(el)}".rstrip())
+        elif el is not model:       # a component; the root's inputs: external inputs
+            for key in _input_keys(type(el)):
+                if port_key(SignalRef(el, key)) not in connected:
+                    problems.append(f"signal input '{_join(el.path, key)}' is not "
+                                    "connected. Connect a source, e.g. blocks.Constant.")
     _check_references(flat, model, elements, nodes, problems)
 
 
@@ -2425,41 +2411,32 @@ def _check_references(flat, model, elements, nodes, problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
     the ports of each physical node ``nodes`` (lists of members; a subsystem's port is one
     node inside and outside) and the ports of one domain on each component."""
-    # each port's number, in tree order, held by the port itself (its `_mark`) while
-    # the networks are joined (a dictionary keyed by every port's identity is a random
-    # access into memory the size of the model)
+    index: dict[int, int] = {}          # id(port) -> its number, in tree order
     parent: list[int] = []              # union-find over the numbers
-    numbered: list[Connector] = []
-    try:
-        for el in elements:
-            if not isinstance(el, Component):
-                continue
-            first: dict[int, int] = {}     # domain -> the first port of it on el
-            for port in el._children.values():
-                if isinstance(port, Connector):
-                    k = port._mark = len(parent)
-                    numbered.append(port)
-                    i = first.setdefault(_domain_id(type(port)), k)
-                    parent.append(i)        # joined to the first port of its domain
-        for members in nodes:
-            ra = None
-            for m in members:
-                port = m.port
-                k = port._mark
-                if k is None:               # not a port of a component: a network of its own
-                    k = port._mark = len(parent)
-                    numbered.append(port)
-                    parent.append(k)
-                rb = root_of(parent, k)
-                if ra is None:
-                    ra = rb
-                elif rb != ra:
-                    parent[rb] = ra
-        # a node's members share their network
-        roots = [root_of(parent, members[0].port._mark) for members in nodes]
-    finally:
-        for port in numbered:
-            port._mark = None
+
+    for el in elements:
+        if not isinstance(el, Component):
+            continue
+        first: dict[int, int] = {}     # domain -> the first port of it on el
+        for port in el._children.values():
+            if isinstance(port, Connector):
+                k = index[id(port)] = len(parent)
+                i = first.setdefault(_domain_id(type(port)), k)
+                parent.append(i)        # joined to the first port of its domain
+    for members in nodes:
+        ra = None
+        for m in members:
+            k = index.get(id(m.port))
+            if k is None:               # not a port of a component: a network of its own
+                k = index[id(m.port)] = len(parent)
+                parent.append(k)
+            rb = root_of(parent, k)
+            if ra is None:
+                ra = rb
+            elif rb != ra:
+                parent[rb] = ra
+    # a node's members share their network
+    roots = [root_of(parent, index[id(members[0].port)]) for members in nodes]
     grounded: set[int] = set()
     for root, members in zip(roots, nodes):
         if root not in grounded and any(m.port._parent is not None and

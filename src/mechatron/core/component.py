@@ -120,10 +120,6 @@ class Element:
         self._values: dict[str, object] = {}
         self._starts: dict[str, Start] = {}
         self._syms: dict | None = None
-        # scratch of one compiler pass at a time (a port's numbers while its connection
-        # sets and networks are formed): declared here, so that every element's
-        # attributes keep the layout they share with their class's other instances
-        self._mark = None
         self._children: dict[str, Element] = {}
         for key, template in type(self)._templates.items():
             self._adopt(key, copy.deepcopy(template))

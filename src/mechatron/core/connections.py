@@ -88,46 +88,32 @@ def connection_sets(connections) -> list[ConnectionSet]:
     component that wrote a ``connect`` and the resolved ports it joins (Connectors or
     SignalRefs). Members are ordered by path within a set, sets by their first member, so
     that the result does not depend on the order the connects were written in."""
-    # each element by number: a connector's two numbers (inside, outside) on the
-    # connector itself (its `_mark`) while the sets are built (a dictionary keyed by every port's
-    # identity is a random access into memory the size of the model); a signal's by
-    # its port_key with the side
+    # each element by number; a connector's key is (id, side), a signal's its port_key
+    # with the side (as port_key, without building a tuple per connector)
     number: dict = {}
     members: list[Member] = []
     parent: list[int] = []
-    numbered: list = []
-    try:
-        for writer, ports in connections:
-            first = None
-            for port in ports:
-                if isinstance(port, SignalRef):
-                    outside = port.owner is writer
-                    key = ("signal", id(port.owner), port.name, outside)
-                    k = number.get(key)
-                    if k is None:
-                        k = number[key] = len(members)
-                        members.append(Member(port, outside))
-                        parent.append(k)
-                else:
-                    outside = port._parent is writer
-                    own = port._mark
-                    if own is None:
-                        own = port._mark = [-1, -1]
-                        numbered.append(port)
-                    k = own[outside]
-                    if k < 0:
-                        k = own[outside] = len(members)
-                        members.append(Member(port, outside))
-                        parent.append(k)
-                if first is None:
-                    first = root_of(parent, k)
-                else:
-                    root = root_of(parent, k)
-                    if root != first:
-                        parent[root] = first
-    finally:
-        for port in numbered:
-            port._mark = None
+
+    for writer, ports in connections:
+        first = None
+        for port in ports:
+            if isinstance(port, SignalRef):
+                outside = port.owner is writer
+                key = ("signal", id(port.owner), port.name, outside)
+            else:
+                outside = port._parent is writer
+                key = (id(port), outside)
+            k = number.get(key)
+            if k is None:
+                k = number[key] = len(members)
+                members.append(Member(port, outside))
+                parent.append(k)
+            if first is None:
+                first = root_of(parent, k)
+            else:
+                root = root_of(parent, k)
+                if root != first:
+                    parent[root] = first
     groups: dict[int, list[Member]] = {}
     for k, member in enumerate(members):
         groups.setdefault(root_of(parent, k), []).append(member)
