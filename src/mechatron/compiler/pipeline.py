@@ -93,8 +93,8 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     model's stacked variable symbols plus constants, put in place between them. Each is
     a sum of model variables read through alias elimination (a variable removed by it is
     a scaled representative or a constant): a model variable the sum of itself, a
-    variable of a folded subsystem port (:mod:`mechatron.compiler.folding`) that of its terms, logged
-    where its port is declared.
+    variable of a folded subsystem port (:mod:`mechatron.compiler.folding`) that of its
+    terms, logged where its port is declared.
 
     The rows of the model's variables come from alias elimination's arrays for all of
     them at once (`AliasResult.representative`, `AliasResult.scale`); only the folded
