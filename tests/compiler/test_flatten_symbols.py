@@ -418,3 +418,82 @@ def test_flow_sums_are_rows_of_one_column_and_say_what_alias_elimination_would_r
             assert eq.alias == ("none",) and read is None
             assert len(ca.symvar(eq.residual)) >= 3
     assert said
+
+
+def passed_on_model():
+    """Parameters passed on unchanged through two levels (``R=R``), and a component with
+    parameters and ports but no variables of its own whose equations read them."""
+
+    class Stage(mt.Component):
+        R = mt.Parameter("Ohm", default=1.0)
+        C = mt.Parameter("F", default=1e-3)
+        p = el.Pin()
+        n = el.Pin()
+        gnd = el.Pin()
+        r = el.Resistor(R=R)
+        c = el.Capacitor(C=C)
+
+        def equations(self):
+            return [mt.connect(self.p, self.r.p), mt.connect(self.r.n, self.c.p, self.n),
+                    mt.connect(self.c.n, self.gnd)]
+
+    class Pair(mt.Component):
+        R = mt.Parameter("Ohm", default=2.0)
+        p = el.Pin()
+        n = el.Pin()
+        gnd = el.Pin()
+        first = Stage(R=R)
+        second = Stage(R=R, C=2e-3)
+
+        def equations(self):
+            return [mt.connect(self.p, self.first.p), mt.connect(self.first.n, self.second.p),
+                    mt.connect(self.second.n, self.n),
+                    mt.connect(self.first.gnd, self.second.gnd, self.gnd)]
+
+    class Leak(mt.Component):
+        G = mt.Parameter("S", default=0.5)
+        p = el.Pin()
+        n = el.Pin()
+
+        def equations(self):
+            return [self.p.i == self.G * (self.p.v - self.n.v), self.p.i + self.n.i == 0]
+
+    m = mt.System("passed_on")
+    src = m.add("src", el.DCVoltageSource(V=2.0))
+    gnd = m.add("gnd", el.ElectricalReference())
+    pair = m.add("pair", Pair(R=4.0))
+    leak = m.add("leak", Leak())
+    m.connect(src.n, gnd.port)
+    m.connect(src.p, pair.p)
+    m.connect(pair.gnd, gnd.port)
+    m.connect(pair.n, leak.p)
+    m.connect(leak.n, gnd.port)
+    return m
+
+
+def test_parameters_passed_on_unchanged_are_their_parents_symbols():
+    flat = fl.flatten(passed_on_model())
+    top = flat.parameters["pair.R"]
+    assert top.value == 4.0
+    for path in ("pair.first.R", "pair.second.R", "pair.first.r.R", "pair.second.r.R"):
+        bound = flat.bound_parameters[path]
+        assert bound.value == 4.0 and bound.unit == "Ohm"
+        assert bound.expr is top.sym          # the parent's symbol itself, formed once
+    assert flat.bound_parameters["pair.second.c.C"].value == 2e-3
+    assert flat.bound_parameters["pair.second.c.C"].expr is flat.parameters[
+        "pair.second.C"].sym
+    assert flat.bound_parameters["pair.first.r.R"].binding == "R of 'pair.first'"
+    # the resistor's law reads the top parameter; the leak's law its own G
+    for owner, name in (("pair.first.r", "pair.R"), ("leak", "leak.G")):
+        used = {s.name() for eq in flat.equations if eq.owner == owner
+                for s in ca.symvar(eq.residual)}
+        assert name in used
+
+
+def test_the_passed_on_model_follows_its_circuit():
+    """Steady state: no current through the capacitors, so 2 V drives the series
+    resistors (4 + 4 Ohm) and the leak (2 Ohm): 0.2 A, and the leak sees 0.4 V."""
+    res = mt.simulate(passed_on_model(), 0.5)
+    assert res.final("leak.p.i") == pytest.approx(0.2, rel=1e-6)
+    assert res.final("pair.second.c.v") == pytest.approx(0.4, rel=1e-6)
+    assert res.final("pair.first.r.i") == pytest.approx(0.2, rel=1e-6)

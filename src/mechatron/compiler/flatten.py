@@ -13,6 +13,7 @@ from collections.abc import (ItemsView, Mapping, MutableMapping, MutableSequence
                              ValuesView)
 from dataclasses import dataclass, field
 from itertools import repeat
+from operator import attrgetter
 
 import casadi as ca
 import numpy as np
@@ -144,6 +145,24 @@ class _ColumnParameter(FlatParameter):
         self.is_input = False
 
     sym = _formed_on_read(_PAR_SYM_SLOT, lambda q: q.store[q.row])
+
+
+_BOUND_EXPR_SLOT = BoundParameter.__dict__["expr"]
+
+
+class _RowBoundParameter(BoundParameter):
+    """A part's parameter passed on unchanged (``R=R``) by an element bound in bulk: its
+    expression is its parent's symbol, the row ``row`` of the parameter column (``store``,
+    a `ColumnRows`), formed as a Python object only when read."""
+
+    __slots__ = ("store", "row")
+
+    def __init__(self, name, store, row, value, unit, doc, owner, binding):
+        _BOUND_EXPR_SLOT.__set__(self, None)
+        self.name, self.store, self.row, self.value = name, store, row, value
+        self.unit, self.doc, self.owner, self.binding = unit, doc, owner, binding
+
+    expr = _formed_on_read(_BOUND_EXPR_SLOT, lambda q: q.store[q.row])
 
 
 class ColumnRows(MutableSequence):
@@ -613,19 +632,31 @@ class FlatModel:
     #: their variables are never unknowns, and are logged from their node.
     folded: list["FoldedPort"] = field(default_factory=list)
 
-    def folded_variables(self):
-        """``(name, unit, doc, position, rows)`` of each variable of a folded port: the
-        sum of the model's variables in ``rows``, logged after the first ``position``
-        variables of the model."""
-        for port in self.folded:
-            plan = _declaration_plan(port.cls)[1]
-            for (key, _, unit, doc, *_), rows in zip(plan, port.terms):
-                yield f"{port.path}.{key}", unit, doc, port.position, rows
+    def folded_columns(self) -> tuple[list, list, list, np.ndarray, list]:
+        """The variables of the folded ports, in bulk: their names, units and docs, each
+        one's ``position`` (logged after the first ``position`` variables of the model)
+        and the ``rows`` of the model's variables it sums; ordered by position, a port's
+        variables together in declaration order."""
+        ports = sorted(self.folded, key=_position)         # stable: tree order kept
+        names: list = []
+        units: list = []
+        docs: list = []
+        terms: list = []
+        for port in ports:
+            keys, port_units, port_docs = _folded_plan(port.cls)
+            prefix = port.path + "."
+            names += [prefix + k for k in keys]
+            units += port_units
+            docs += port_docs
+            terms += port.terms
+        position = np.repeat(np.array([port.position for port in ports], dtype=np.intp),
+                             [len(port.terms) for port in ports])
+        return names, units, docs, position, terms
 
     @property
     def n_folded(self) -> int:
         """How many variables the folded ports hold."""
-        return sum(len(_declaration_plan(port.cls)[1]) for port in self.folded)
+        return sum(len(port.terms) for port in self.folded)
 
     @property
     def time(self) -> ca.SX:
@@ -879,7 +910,8 @@ class _ColumnSyms(dict):
     (``par_rows``: each one's row, in declaration order; a parameter bound to an
     expression of its parent's is held as bound). A class template's instance never
     reads them one by one (`_Template.add` takes their rows). ``row`` is the row of its
-    first variable among the model's variables (`_first_row`)."""
+    first variable among the model's variables (`_first_row`); an element with
+    parameters alone has no ``column`` and the row -1."""
 
     __slots__ = ("column", "base", "offsets", "row", "par_store", "par_rows",
                  "par_places")
@@ -977,24 +1009,23 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     for el, params, plain, offsets in bound:
         if params:
             own_values = values[id(el)] = {}
-            syms = _ColumnSyms() if plain else {}
+            syms = _ColumnSyms()    # each parameter's symbol read from the column on first read
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner._path_cache if owner is not None else ""
             el_rows = par_rows[id(el)] = list(range(pi, pi + len(params)))
-            if plain:       # each parameter's symbol read from the column on first read
-                syms.par_store, syms.par_rows = par_store, el_rows
-                syms.par_places = _parameter_places(type(el))
+            syms.par_store, syms.par_rows = par_store, el_rows
+            syms.par_places = _parameter_places(type(el))
             for j, (key, decl) in enumerate(params):
                 path = par_names[pi]
                 row = el_rows[j]
                 pi += 1
                 raw = el._values.get(key, decl.default)
                 if isinstance(raw, ParameterExpression):
-                    syms[key], own_values[key], el_rows[j] = _bind_expression(
-                        flat, el, key, decl, raw, values, problems, par_rows)
+                    sym, own_values[key], el_rows[j] = _bind_expression(
+                        flat, el, key, decl, raw, values, problems, par_rows, par_store)
+                    if sym is not None:     # else read from the column by its row
+                        syms[key] = sym
                     continue
-                if not plain:
-                    syms[key] = par_store[row]
                 value = float("nan")
                 if raw is None:
                     problems.add(ParameterError,
@@ -1031,6 +1062,8 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                             problems.add(UnitError, str(exc))
                         record.priority = given.priority
             vi += len(plain)
+        elif params:        # parameters alone: no variables of its own
+            syms.column, syms.base, syms.offsets, syms.row = None, 0, _NO_PLACES, -1
         el._syms = syms
     if type(ctx.unknowns) is not _Unknowns:
         ctx.unknowns = _Unknowns(variables, ctx.unknowns)
@@ -1212,6 +1245,16 @@ class _FoldedSymbols(dict):
         return dict.__getitem__(self, key)
 
 
+_position = attrgetter("position")
+
+
+@functools.lru_cache(maxsize=None)
+def _folded_plan(cls) -> tuple:
+    """The keys, units and docs of a connector class's variables (once per class)."""
+    plain = _declaration_plan(cls)[1]
+    return tuple(e[0] for e in plain), tuple(e[2] for e in plain), tuple(e[3] for e in plain)
+
+
 @functools.lru_cache(maxsize=None)
 def _declaration_plan(cls):
     """A class's parameters ``[(key, decl)]`` and variables with what flattening copies of
@@ -1252,48 +1295,59 @@ def _binding_plan(cls):
         dict(zip(var_keys, range(len(var_keys))))
 
 
-def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows):
+def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows, store):
     """Bind ``el.key`` to an expression of its parent's parameters: the symbol is the
     expression of the parent's symbols, the value its value; units must agree. Returns
     ``(symbol, value, row)``: ``row`` is the parent parameter's row in the parameter
     column for a parameter passed on unchanged (``R=R``: the same symbol), else -1 (an
-    expression, or a problem)."""
-    path = _join(el._path_cache or "", key)
+    expression, or a problem). A parameter passed on unchanged from a row comes back with
+    the symbol None: the element's symbols read it from that column (``store``, its
+    `ColumnRows`) when it is read at all (a template instance never reads it), and so
+    does its record."""
     parent = el._parent
-    text = _expression_text(expr)
-
-    def where() -> str:             # formatted only for a message
-        return f"{el.describe()}: {key} = {text}"
-
     if parent is None or parent._syms is None:
-        problems.append(f"{where()} refers to parameters of an enclosing component, but "
-                        f"{el.describe()} has none. Give {key} a value.")
+        problems.append(f"{_binding_where(el, key, expr)} refers to parameters of an "
+                        f"enclosing component, but {el.describe()} has none. Give {key} "
+                        "a value.")
         return ca.SX.nan(), float("nan"), -1
     missing, message, name = _binding_check(expr, type(parent), decl.unit)
     if missing:
-        problems.append(f"{where()}: {', '.join(missing)} is not a parameter of "
-                        f"{parent.describe()}. Pass on parameters of the class whose body "
-                        "declares the part.")
+        problems.append(f"{_binding_where(el, key, expr)}: {', '.join(missing)} is not a "
+                        f"parameter of {parent.describe()}. Pass on parameters of the class "
+                        "whose body declares the part.")
         return ca.SX.nan(), float("nan"), -1
     if message:
-        problems.add(UnitError, f"{where()}: {message}")
+        problems.add(UnitError, f"{_binding_where(el, key, expr)}: {message}")
         return ca.SX.nan(), float("nan"), -1
     pvals = values.get(id(parent), {})
+    path = _join(el._path_cache or "", key)
+    binding = f"{_expression_text(expr)} of '{parent._path_cache or flat.name}'"
     row = -1
     if name is not None:            # R=R: the parent's symbol and value themselves
-        sym, value = parent._syms[name], float(pvals.get(name, float("nan")))
+        value = float(pvals.get(name, float("nan")))
         rows = par_rows.get(id(parent))
         if rows is not None:
-            row = rows[_binding_plan(type(parent))[2].index(name)]
+            row = rows[_parameter_places(type(parent))[name]]
+        if row >= 0:
+            _check_range(el, key, decl, value, problems)
+            flat.bound_parameters[path] = _RowBoundParameter(
+                path, store, row, value, decl.unit, decl.doc, el._path_cache or "",
+                binding)
+            return None, value, row
+        sym = parent._syms[name]
     else:
         sym = expr.evaluate(lambda n: parent._syms[n])
         sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
         value = float(expr.evaluate(lambda n: pvals.get(n, float("nan"))))
     _check_range(el, key, decl, value, problems)
     flat.bound_parameters[path] = BoundParameter(
-        path, sym, value, decl.unit, decl.doc, el._path_cache or "",
-        f"{text} of '{parent._path_cache or flat.name}'")
+        path, sym, value, decl.unit, decl.doc, el._path_cache or "", binding)
     return sym, value, row
+
+
+def _binding_where(el, key, expr) -> str:
+    """``"Resistor 'h.a': R = R"``: where a binding is, for a message."""
+    return f"{el.describe()}: {key} = {_expression_text(expr)}"
 
 
 _TEXTS: dict = {}

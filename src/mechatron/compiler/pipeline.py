@@ -108,31 +108,28 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         rep, scale = alias.representative, alias.scale
     else:
         rep, scale = np.arange(n), np.ones(n)
-    folded = sorted(flat.folded_variables(), key=lambda f: f[3])
-    if not names and not folded:
+    f_names, f_units, f_docs, position, f_terms = flat.folded_columns()
+    n_f = len(f_names)
+    if not names and not n_f:
         return names, units, docs, ca.SX(0, 1)
     # row of each model variable: after the folded variables placed before it
-    position = np.array([f[3] for f in folded], dtype=np.intp)
     var_row = np.arange(n) + np.searchsorted(position, np.arange(n), side="right")
     kept = rep >= 0
-    if not folded:
+    if not n_f:
         return names, units, docs, _read_through(flat.stack_variables(), rep, scale, kept)
     # the folded variables' rows among the model's, then their terms in bulk: one sparse
     # product for those rows alone, the model's variables put in place around them
-    n_f = len(folded)
     at = np.minimum(position, n) + np.arange(n_f)
     is_folded = np.zeros(n + n_f, dtype=bool)
     is_folded[at] = True
     merged = []
-    for mine, extra in ((names, [f[0] for f in folded]), (units, [f[1] for f in folded]),
-                        (docs, [f[2] for f in folded])):
+    for mine, extra in ((names, f_names), (units, f_units), (docs, f_docs)):
         out = np.empty(n + n_f, dtype=object)
         out[at] = extra
         out[~is_folded] = mine
         merged.append(out.tolist())
-    t_row = np.repeat(np.arange(n_f), [len(f[4]) for f in folded])
-    t_var = np.fromiter(chain.from_iterable(f[4] for f in folded), dtype=np.intp,
-                        count=t_row.size)
+    t_row = np.repeat(np.arange(n_f), [len(rows) for rows in f_terms])
+    t_var = np.fromiter(chain.from_iterable(f_terms), dtype=np.intp, count=t_row.size)
     t_coef = scale[t_var]
     t_rep = rep[t_var]
     gone = t_rep < 0
@@ -177,8 +174,9 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     flat = flatten(model, name)
     replace_pre(flat)
     # a folded port variable counts as an unknown and the equation that gives it
-    n_vars_flat = len(flat.variables) + flat.n_folded
-    n_eqs_flat = len(flat.equations) + len(flat.aliases) + flat.n_folded
+    n_folded = flat.n_folded
+    n_vars_flat = len(flat.variables) + n_folded
+    n_eqs_flat = len(flat.equations) + len(flat.aliases) + n_folded
     lap("flatten")
 
     if dimensions:
