@@ -111,18 +111,18 @@ def build_host(loop: LoopFunctions, out: Path, cc: str | None = None) -> dict[st
     for src, flags in (("plant_model.c", CFLAGS + GENERATED_CFLAGS),
                        (ctrl_c[0], CTRL_CFLAGS), (ctrl_c[1], CTRL_CFLAGS),
                        *((s, CFLAGS + ["-Werror", "-D_GNU_SOURCE"] + inc) for s in
-                         ("mt_packet.c", "mt_transport.c", "ctrl_core.c", "plant_runner.c",
-                          "controller_main.c", "sil_loop.c"))):
+                         ("mt_packet.c", "mt_transport.c", "ctrl_core.c", "mt_plant_io.c",
+                          "plant_runner.c", "controller_main.c", "sil_loop.c"))):
         _run([cc, *flags, "-c", src, "-o", Path(src).stem + ".o"], out, src)
     plant = out / "mt_plant"
     ctrl = out / "mt_controller"
-    _run([cc, "-o", plant.name, "plant_runner.o", "plant_model.o", "mt_packet.o",
-          "mt_transport.o", "-lm"], out, "mt_plant")
+    _run([cc, "-o", plant.name, "plant_runner.o", "mt_plant_io.o", "plant_model.o",
+          "mt_packet.o", "mt_transport.o", "-lm"], out, "mt_plant")
     _run([cc, "-o", ctrl.name, "controller_main.o", "ctrl_core.o",
           f"{CONTROLLER_NAME}.o", f"{CONTROLLER_NAME}_casadi.o", "mt_packet.o",
           "mt_transport.o", "-lm"], out, "mt_controller")
     sil = out / "mt_sil"
-    _run([cc, "-o", sil.name, "sil_loop.o", "ctrl_core.o", "plant_model.o",
+    _run([cc, "-o", sil.name, "sil_loop.o", "mt_plant_io.o", "ctrl_core.o", "plant_model.o",
           f"{CONTROLLER_NAME}.o", f"{CONTROLLER_NAME}_casadi.o", "mt_packet.o",
           "mt_transport.o", "-lm"], out, "mt_sil")
     return {"plant": plant, "controller": ctrl, "sil": sil}

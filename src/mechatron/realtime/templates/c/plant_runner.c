@@ -28,28 +28,15 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
-#include <sys/prctl.h>
 #include <time.h>
 
-#include "mt_casadi.h"
+#include "mt_plant_io.h"
 #include "mt_transport.h"
-#include "plant_model.h"
 
-#define NCOL 13
-static const char *COLS[NCOL] = {"t", "duty", "ref", "count", "w", "phi", "v_c", "i",
-                                 "got", "wake_late_s", "exec_s", "busy_s", "rtt_s"};
-#define MAX_STATES 64
+#define NCOL MT_LOG_NCOL
 /* lockstep: a reply not in after LOSS_RTT_FACTOR mean round trips (>= LOSS_FLOOR_S) is lost */
 #define LOSS_RTT_FACTOR 20.0
 #define LOSS_FLOOR_S 0.05
-
-static volatile sig_atomic_t g_stop = 0;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    g_stop = 1;
-}
 
 typedef struct {
     double rate;
@@ -111,7 +98,7 @@ int main(int argc, char **argv)
     options o;
     mt_link link;
     int have_link = 0, rt_ok = 0;
-    double x[MAX_STATES], xn[MAX_STATES], meas[8], duty, ref = 0.0;
+    double x[MT_MAX_STATES], meas[MT_MAX_MEAS], duty, ref = 0.0;
     double *log;
     long k, done = 0, overruns = 0, missed = 0, late = 0, stale = 0;
     double max_exec = 0, max_late = 0, sum_exec = 0;
@@ -120,23 +107,15 @@ int main(int argc, char **argv)
     struct timespec start, deadline;
     int64_t period_ns;
     int nx, i;
-    struct sigaction sa;
     double t_wall0, t_wall;
 
     if (parse(argc, argv, &o) != 0) return 2;
-    nx = MT_DIM_OUT(plant_step, 0);
-    if (nx > MAX_STATES || MT_DIM_OUT(plant_out, 0) > 8) {
-        fprintf(stderr, "mt_plant: model too large for this runner\n");
-        return 2;
-    }
+    nx = mt_plant_size("mt_plant");
+    if (nx < 0) return 2;
     log = calloc((size_t)o.steps * NCOL, sizeof(double));
     if (!log) { fprintf(stderr, "mt_plant: cannot allocate the log\n"); return 2; }
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    mt_catch_stop();
     signal(SIGPIPE, SIG_IGN);
-    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);     /* 1 ns timer slack instead of 50 us */
 
     if (!strcmp(o.transport, "udp")) {
         if (mt_link_udp(&link, 0, 0) != 0) { perror("mt_plant: udp"); return 1; }
@@ -177,34 +156,24 @@ int main(int argc, char **argv)
         if (rt_ok) mlockall(MCL_CURRENT | MCL_FUTURE);
     }
 
-    {
-        casadi_real *res[1];
-        res[0] = x;
-        MT_CALL(plant_x0, (const casadi_real **)0, res);
-    }
+    mt_plant_start(x);
     duty = o.duty;
     period_ns = (int64_t)(1e9 / o.rate + 0.5);
     clock_gettime(CLOCK_MONOTONIC, &start);
     mt_ts_add(&start, 1000000);          /* first deadline 1 ms from now */
     deadline = start;
     t_wall0 = mt_ts_sec(&start);
-    for (k = 0; k < o.steps && !g_stop; ++k) {
+    for (k = 0; k < o.steps && !mt_stop; ++k) {
         double t_wake, t0, t1, t_end, e_out, rtt = -1.0;
         int got = 0;
         double *row = log + (size_t)k * NCOL;
         if (o.lockstep <= 0 || k == 0) {
             while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &deadline, NULL) == EINTR)
-                if (g_stop) break;
-            if (g_stop) break;
+                if (mt_stop) break;
+            if (mt_stop) break;
         }
         t_wake = mt_now();
-        {
-            const casadi_real *arg[1];
-            casadi_real *res[1];
-            arg[0] = x;
-            res[0] = meas;
-            MT_CALL(plant_out, arg, res);
-        }
+        mt_plant_measure(x, meas);
         e_out = mt_now() - t_wake;
         if (have_link) {
             mt_packet s, r;
@@ -247,19 +216,9 @@ int main(int argc, char **argv)
             got = 1;
         }
         t0 = mt_now();
-        {
-            double kk = (double)k;
-            const casadi_real *arg[3];
-            casadi_real *res[1];
-            arg[0] = x; arg[1] = &duty; arg[2] = &kk;
-            res[0] = xn;
-            MT_CALL(plant_step, arg, res);
-        }
+        mt_plant_advance(x, nx, duty, k);
         t1 = mt_now();
-        for (i = 0; i < nx; ++i) x[i] = xn[i];
-        row[0] = (double)k / o.rate; row[1] = duty; row[2] = ref;
-        for (i = 0; i < 5; ++i) row[3 + i] = meas[i];
-        row[8] = got;
+        mt_log_fill(row, (double)k / o.rate, duty, ref, meas, got);
         row[9] = t_wake - mt_ts_sec(&deadline);
         row[10] = (t1 - t0) + e_out;
         t_end = mt_now();
@@ -289,14 +248,7 @@ int main(int argc, char **argv)
         while (mt_link_recv(&link, &r, &until) == 1)
             if (r.type == MT_COMMAND && r.seq < (uint32_t)done) late++;
     }
-    if (o.log) {
-        FILE *f = fopen(o.log, "wb");
-        if (!f || fwrite(log, sizeof(double) * NCOL, (size_t)done, f) != (size_t)done) {
-            fprintf(stderr, "mt_plant: cannot write %s\n", o.log);
-            return 1;
-        }
-        fclose(f);
-    }
+    if (o.log && mt_log_write(o.log, log, done, "mt_plant") != 0) return 1;
     {
         double *ex = malloc(sizeof(double) * (size_t)(done ? done : 1));
         double median = 0;
@@ -325,9 +277,7 @@ int main(int argc, char **argv)
                 max_late, t_wall, rt_ok ? "true" : "false", o.lockstep > 0 ? "true" : "false");
         /* the longest a step waited for its reply once the link was up */
         fprintf(f, " \"reply_timeout_s\": %.9g,\n", o.lockstep > 0 ? max_tmo : o.wait / o.rate);
-        fprintf(f, " \"interrupted\": %s, \"columns\": [", g_stop ? "true" : "false");
-        for (i = 0; i < NCOL; ++i) fprintf(f, "%s\"%s\"", i ? ", " : "", COLS[i]);
-        fprintf(f, "]}\n");
+        mt_json_columns(f);
         if (o.stats) fclose(f);
         free(ex);
     }

@@ -42,23 +42,11 @@
 #include <unistd.h>
 
 #include "ctrl_core.h"
-#include "mt_casadi.h"
+#include "mt_plant_io.h"
 #include "mt_transport.h"
-#include "plant_model.h"
 
-#define NCOL 13
-static const char *COLS[NCOL] = {"t", "duty", "ref", "count", "w", "phi", "v_c", "i",
-                                 "got", "wake_late_s", "exec_s", "busy_s", "rtt_s"};
-#define MAX_STATES 64
+#define NCOL MT_LOG_NCOL
 #define EXIT_BUDGET 3
-
-static volatile sig_atomic_t g_stop = 0;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    g_stop = 1;
-}
 
 typedef struct {
     double rate;
@@ -139,32 +127,24 @@ int main(int argc, char **argv)
     options o;
     mt_ctrl ctrl;
     mt_rng rng_plant, rng_ctrl;
-    double x[MAX_STATES], xn[MAX_STATES], meas[8], duty, ref;
+    double x[MT_MAX_STATES], meas[MT_MAX_MEAS], duty, ref;
     double *log;
     long k, done = 0, overruns = 0, missed = 0, skipped = 0, dropped_plant = 0;
     long dropped_ctrl = 0;
     struct timespec start, deadline;
     int64_t period_ns, spin_ns;
-    int nx, i, fifo_ok = 0, lock_ok = 0, cpu_ok = 0, over_budget = 0;
+    int nx, fifo_ok = 0, lock_ok = 0, cpu_ok = 0, over_budget = 0;
     const char *fifo_err = NULL, *lock_err = NULL, *cpu_err = NULL, *awake_err = NULL;
     pid_t spinner = -1;
-    struct sigaction sa;
     double t_wall0, t_wall, period;
 
     if (parse(argc, argv, &o) != 0) return 2;
-    nx = MT_DIM_OUT(plant_step, 0);
-    if (nx > MAX_STATES || MT_DIM_OUT(plant_out, 0) > 8) {
-        fprintf(stderr, "mt_sil: model too large for this loop\n");
-        return 2;
-    }
+    nx = mt_plant_size("mt_sil");
+    if (nx < 0) return 2;
     log = calloc((size_t)o.steps * NCOL, sizeof(double));
     if (!log) { fprintf(stderr, "mt_sil: cannot allocate the log\n"); return 2; }
     memset(log, 0, (size_t)o.steps * NCOL * sizeof(double));   /* fault every page in */
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);     /* 1 ns timer slack instead of 50 us */
+    mt_catch_stop();
 
     if (o.awake && o.cpu >= 0) {
         spinner = start_spinner(o.cpu);
@@ -188,11 +168,7 @@ int main(int argc, char **argv)
     mt_rng_seed(&rng_plant, (uint64_t)o.seed);
     mt_rng_seed(&rng_ctrl, (uint64_t)o.seed + 1);
     mt_ctrl_init(&ctrl);
-    {
-        casadi_real *res[1];
-        res[0] = x;
-        MT_CALL(plant_x0, (const casadi_real **)0, res);
-    }
+    mt_plant_start(x);
     duty = ctrl.last_duty;
     ref = ctrl.last_ref;
     period = 1.0 / o.rate;
@@ -203,7 +179,7 @@ int main(int argc, char **argv)
     mt_ts_add(&start, 1000000);          /* first deadline 1 ms from now */
     deadline = start;
     t_wall0 = mt_ts_sec(&start);
-    for (k = 0; k < o.steps && !g_stop; ++k) {
+    for (k = 0; k < o.steps && !mt_stop; ++k) {
         double t_wake, t_dead, t0, t1, t2, t_end;
         int got = 0;
         double *row = log + (size_t)k * NCOL;
@@ -212,20 +188,14 @@ int main(int argc, char **argv)
             struct timespec nap = deadline;
             mt_ts_add(&nap, -spin_ns);
             while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &nap, NULL) == EINTR)
-                if (g_stop) break;
-            if (g_stop) break;
+                if (mt_stop) break;
+            if (mt_stop) break;
             while (spin_ns > 0 && mt_now() < t_dead) {
             }
         }
         t_wake = mt_now();
         t0 = mt_now();
-        {
-            const casadi_real *arg[1];
-            casadi_real *res[1];
-            arg[0] = x;
-            res[0] = meas;
-            MT_CALL(plant_out, arg, res);
-        }
+        mt_plant_measure(x, meas);
         t1 = mt_now();
         row[12] = -1.0;
         if (t1 > t_dead + period) {
@@ -249,19 +219,9 @@ int main(int argc, char **argv)
         }
         if (!got) missed++;
         t2 = mt_now();
-        {
-            double kk = (double)k;
-            const casadi_real *arg[3];
-            casadi_real *res[1];
-            arg[0] = x; arg[1] = &duty; arg[2] = &kk;
-            res[0] = xn;
-            MT_CALL(plant_step, arg, res);
-        }
-        for (i = 0; i < nx; ++i) x[i] = xn[i];
+        mt_plant_advance(x, nx, duty, k);
         t_end = mt_now();
-        row[0] = (double)k * period; row[1] = duty; row[2] = ref;
-        for (i = 0; i < 5; ++i) row[3 + i] = meas[i];
-        row[8] = got;
+        mt_log_fill(row, (double)k * period, duty, ref, meas, got);
         row[9] = t_wake - t_dead;
         row[10] = (t1 - t0) + (t_end - t2) + (row[12] > 0 ? row[12] : 0.0);
         row[11] = t_end - t_wake;
@@ -276,14 +236,7 @@ int main(int argc, char **argv)
     }
     if (o.max_overruns >= 0 && (double)overruns > o.max_overruns * (double)(done ? done : 1))
         over_budget = 1;
-    if (o.log) {
-        FILE *f = fopen(o.log, "wb");
-        if (!f || fwrite(log, sizeof(double) * NCOL, (size_t)done, f) != (size_t)done) {
-            fprintf(stderr, "mt_sil: cannot write %s\n", o.log);
-            return 1;
-        }
-        fclose(f);
-    }
+    if (o.log && mt_log_write(o.log, log, done, "mt_sil") != 0) return 1;
     {
         FILE *f = o.stats ? fopen(o.stats, "w") : stdout;
         int first = 1;
@@ -314,9 +267,7 @@ int main(int argc, char **argv)
             json_note(f, &first, "keep-awake needs a pinned CPU (--cpu)", NULL);
         if (o.awake && awake_err) json_note(f, &first, "keep-awake refused", awake_err);
         fprintf(f, "],\n");
-        fprintf(f, " \"interrupted\": %s, \"columns\": [", g_stop ? "true" : "false");
-        for (i = 0; i < NCOL; ++i) fprintf(f, "%s\"%s\"", i ? ", " : "", COLS[i]);
-        fprintf(f, "]}\n");
+        mt_json_columns(f);
         if (o.stats) fclose(f);
     }
     free(log);
