@@ -73,6 +73,27 @@ def test_a_parameter_change_recomputes_the_matrix(linear):
     assert np.max(np.abs(voltages(res, N) - exact)) < 1e-9
 
 
+def test_the_matrix_is_evaluated_once_per_parameters(linear, monkeypatch):
+    """The choice of the linear solver and the run read the same nonzeros of ``A(p)``: one
+    evaluation for each new set of parameters, and the kept values cannot be changed."""
+    cm = mt.compile_model(ladder(N))
+    form = variable.linear_form(cm)
+    calls = []
+    real = variable.evaluate_point
+    monkeypatch.setattr(variable, "evaluate_point",
+                        lambda f, args: calls.append(f) or real(f, args))
+    res = mt.simulate(cm, 0.1, params={"r0.R": 2.0}, **TIGHT)
+    assert res.stats.solver == "cvodes"
+    assert variable.auto_linear_solver(cm, "cvodes", cm.parameter_vector(
+        {"r0.R": 2.0})) == variable.TRIDIAGONAL
+    assert calls.count(form.jacobian) == 1
+    values = form.nonzeros(cm.parameter_vector({"r0.R": 2.0}))
+    assert not values.flags.writeable
+    changed = form.nonzeros(cm.parameter_vector({"r0.R": 4.0}))
+    assert calls.count(form.jacobian) == 2
+    assert not np.array_equal(changed, values)      # the source's row holds 1/R0
+
+
 def test_a_segmented_run_in_linear_form_keeps_its_time(linear, monkeypatch):
     """The offset ``c(t, p)`` of a sine-driven ladder reads the absolute time in every
     segment."""

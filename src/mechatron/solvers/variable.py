@@ -112,16 +112,14 @@ def auto_linear_solver(cm: CompiledModel, plugin: str, p: np.ndarray,
     fallback = LINEAR_SOLVERS["auto"]
     if plugin != "cvodes" or cm.nz or cm.nr or drive or cm.nX < 3:
         return fallback
-    jac = _tridiagonal_jacobian(cm)
-    if jac is None:
+    form = _tridiagonal_form(cm)
+    if form is None:
         return fallback
-    fn, rows, cols = jac
     key = np.asarray(p, dtype=float).tobytes()
     last = cm._cache.get("tridiagonal_p")
     if last is not None and last[0] == key:
         return last[1]
-    with np.errstate(all="ignore"):
-        values = evaluate_point(fn, [np.asarray(p, dtype=float)])
+    values, rows, cols = form.nonzeros(p), form.rows, form.cols
     on_diag = rows == cols
     diag = np.zeros(cm.nX)
     diag[rows[on_diag]] = values[on_diag]
@@ -131,14 +129,14 @@ def auto_linear_solver(cm: CompiledModel, plugin: str, p: np.ndarray,
     return TRIDIAGONAL if safe else fallback
 
 
-def _tridiagonal_jacobian(cm: CompiledModel):
-    """``(J(p), rows, cols)`` when the model's ODE Jacobian is constant in time and
-    states and its pattern with the diagonal added is the full tridiagonal band (what
-    CasADi's ``tridiag`` plug-in indexes), else None; decided once per model."""
+def _tridiagonal_form(cm: CompiledModel) -> LinearForm | None:
+    """The model's `LinearForm` when its pattern with the diagonal added is the full
+    tridiagonal band (what CasADi's ``tridiag`` plug-in indexes), else None; decided once
+    per model."""
     form = linear_form(cm)
     if form is None or form.sparsity + ca.Sparsity.diag(cm.nX) != ca.Sparsity.banded(cm.nX, 1):
         return None
-    return form.jacobian, form.rows, form.cols
+    return form
 
 
 #: Fewest states for which a linear, time-invariant ODE runs in the linear form (see
@@ -157,11 +155,21 @@ class LinearForm:
         self.sparsity = jacobian.sparsity_out(0)
         self.rows, self.cols = (np.asarray(v, dtype=np.int64)
                                 for v in self.sparsity.get_triplet())
+        self._last: tuple | None = None     # the last parameters and their nonzeros
 
     def nonzeros(self, p: np.ndarray) -> np.ndarray:
-        """The nonzeros of ``A(p)``, column by column."""
-        with np.errstate(all="ignore"):
-            return evaluate_point(self.jacobian, [np.asarray(p, dtype=float)])
+        """The nonzeros of ``A(p)``, column by column (read-only). Those of the last
+        parameters are kept: a run and the choice of its linear solver
+        (`auto_linear_solver`) evaluate ``A`` once between them."""
+        p = np.asarray(p, dtype=float)
+        key = p.tobytes()
+        last = self._last
+        if last is None or last[0] != key:
+            with np.errstate(all="ignore"):
+                values = evaluate_point(self.jacobian, [p])
+            values.flags.writeable = False
+            last = self._last = (key, values)
+        return last[1]
 
 
 def linear_form(cm: CompiledModel) -> LinearForm | None:
