@@ -421,34 +421,9 @@ def test_flow_sums_are_rows_of_one_column_and_say_what_alias_elimination_would_r
 
 
 def passed_on_model():
-    """Parameters passed on unchanged through two levels (``R=R``), and a component with
-    parameters and ports but no variables of its own whose equations read them."""
-
-    class Stage(mt.Component):
-        R = mt.Parameter("Ohm", default=1.0)
-        C = mt.Parameter("F", default=1e-3)
-        p = el.Pin()
-        n = el.Pin()
-        gnd = el.Pin()
-        r = el.Resistor(R=R)
-        c = el.Capacitor(C=C)
-
-        def equations(self):
-            return [mt.connect(self.p, self.r.p), mt.connect(self.r.n, self.c.p, self.n),
-                    mt.connect(self.c.n, self.gnd)]
-
-    class Pair(mt.Component):
-        R = mt.Parameter("Ohm", default=2.0)
-        p = el.Pin()
-        n = el.Pin()
-        gnd = el.Pin()
-        first = Stage(R=R)
-        second = Stage(R=R, C=2e-3)
-
-        def equations(self):
-            return [mt.connect(self.p, self.first.p), mt.connect(self.first.n, self.second.p),
-                    mt.connect(self.second.n, self.n),
-                    mt.connect(self.first.gnd, self.second.gnd, self.gnd)]
+    """Parameters passed on unchanged through two levels (``R=R``: `Pair` to its stages to
+    their parts), and a component with parameters and ports but no variables of its own
+    whose equations read them."""
 
     class Leak(mt.Component):
         G = mt.Parameter("S", default=0.5)
@@ -461,7 +436,7 @@ def passed_on_model():
     m = mt.System("passed_on")
     src = m.add("src", el.DCVoltageSource(V=2.0))
     gnd = m.add("gnd", el.ElectricalReference())
-    pair = m.add("pair", Pair(R=4.0))
+    pair = m.add("pair", Pair(R=4.0, C=1e-3))
     leak = m.add("leak", Leak())
     m.connect(src.n, gnd.port)
     m.connect(src.p, pair.p)
@@ -473,18 +448,17 @@ def passed_on_model():
 
 def test_parameters_passed_on_unchanged_are_their_parents_symbols():
     flat = fl.flatten(passed_on_model())
-    top = flat.parameters["pair.R"]
-    assert top.value == 4.0
-    for path in ("pair.first.R", "pair.second.R", "pair.first.r.R", "pair.second.r.R"):
-        bound = flat.bound_parameters[path]
-        assert bound.value == 4.0 and bound.unit == "Ohm"
-        assert bound.expr is top.sym          # the parent's symbol itself, formed once
-    assert flat.bound_parameters["pair.second.c.C"].value == 2e-3
-    assert flat.bound_parameters["pair.second.c.C"].expr is flat.parameters[
-        "pair.second.C"].sym
+    for key, unit, value, part in (("R", "Ohm", 4.0, "r"), ("C", "F", 1e-3, "c")):
+        sym = flat.parameters[f"pair.{key}"].sym
+        for stage in ("pair.first", "pair.second"):
+            for path in (f"{stage}.{key}", f"{stage}.{part}.{key}"):
+                bound = flat.bound_parameters[path]
+                assert bound.value == value and bound.unit == unit
+                assert bound.expr is sym        # the top symbol itself, formed once
     assert flat.bound_parameters["pair.first.r.R"].binding == "R of 'pair.first'"
     # the resistor's law reads the top parameter; the leak's law its own G
-    for owner, name in (("pair.first.r", "pair.R"), ("leak", "leak.G")):
+    for owner, name in (("pair.first.r", "pair.R"), ("pair.second.c", "pair.C"),
+                        ("leak", "leak.G")):
         used = {s.name() for eq in flat.equations if eq.owner == owner
                 for s in ca.symvar(eq.residual)}
         assert name in used
