@@ -1009,7 +1009,8 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     for el, params, plain, offsets in bound:
         if params:
             own_values = values[id(el)] = {}
-            syms = _ColumnSyms()    # each parameter's symbol read from the column on first read
+            # each parameter's symbol read from the column on first read
+            syms = _ColumnSyms()
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner._path_cache if owner is not None else ""
             el_rows = par_rows[id(el)] = list(range(pi, pi + len(params)))
@@ -1252,7 +1253,8 @@ _position = attrgetter("position")
 def _folded_plan(cls) -> tuple:
     """The keys, units and docs of a connector class's variables (once per class)."""
     plain = _declaration_plan(cls)[1]
-    return tuple(e[0] for e in plain), tuple(e[2] for e in plain), tuple(e[3] for e in plain)
+    units, docs = tuple(e[2] for e in plain), tuple(e[3] for e in plain)
+    return tuple(e[0] for e in plain), units, docs
 
 
 @functools.lru_cache(maxsize=None)
