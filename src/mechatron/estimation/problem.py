@@ -446,7 +446,9 @@ class EstimationProblem:
         step-doubling estimate (``m`` against ``2m`` substeps, at the parameter vector
         ``p``) is at most ``substep_tol``. Doubles from the first ``m >= start`` that
         puts every clock tick on a substep end, then tries a count between the last two
-        (predicted from the observed order, checked against the ``2m`` solution)."""
+        (predicted from the observed order, checked against the ``2m`` solution). Its
+        trajectories run in native code where the fit's would (`_use_jit`): the chosen one
+        then serves the fit as it is, and the checks run at the fit's speed."""
         e = b["exp"]
         top = self.max_substeps
         base = int(start)
@@ -458,7 +460,7 @@ class EstimationProblem:
 
         def traj(k):
             if k not in cache:
-                cache[k] = self._trajectory(b, k)
+                cache[k] = self._trajectory(b, k, self._use_jit(e.n * k))
             return cache[k]
 
         tol = self.substep_tol * std_scale
@@ -504,7 +506,8 @@ class EstimationProblem:
         out = {}
         for b in self.bound:
             p, x0 = self._point(b, theta)
-            fine = self._trajectory(b, 2 * b["substeps"])
+            m = 2 * b["substeps"]
+            fine = self._trajectory(b, m, self._use_jit(b["exp"].n * m))
             out[b["exp"].name] = self._error_between(b, p, x0, b["traj"], fine)
         return out
 
@@ -641,7 +644,8 @@ class EstimationProblem:
                 # chosen from the error estimate: check it at theta, and double as needed
                 p, x0 = self._point(b, theta)
                 m = b["substeps"]
-                err = self._error_between(b, p, x0, b["traj"], self._trajectory(b, 2 * m))
+                fine = self._trajectory(b, 2 * m, self._use_jit(b["exp"].n * 2 * m))
+                err = self._error_between(b, p, x0, b["traj"], fine)
                 if err <= self.substep_tol * std_scale or 2 * m > self.max_substeps:
                     continue
                 try:
