@@ -402,8 +402,8 @@ class EstimationProblem:
                     continue
                 b["error_initial"] = err
                 b["substeps_initial"] = m
-            if traj is None or traj.jit != self._use_jit(e.n * m):
-                traj = self._trajectory(b, m, self._use_jit(e.n * m))
+            if traj is None:
+                traj = self._trajectory(b, m)
             try:
                 traj.check_ticks(pe)
             except DataError as exc:
@@ -415,10 +415,13 @@ class EstimationProblem:
             raise DataError(" ".join(problems), problems=problems)
         self._build_residual()
 
-    def _trajectory(self, b, m: int, jit: bool = False) -> Trajectory:
+    def _trajectory(self, b, m: int) -> Trajectory:
+        """Experiment ``b``'s trajectory with ``m`` substeps per sample, in native code
+        when its runs are long enough for it (`_use_jit`): the step-doubling checks and
+        the fit run alike, and the trajectory the checks choose serves the fit."""
         e = b["exp"]
         return Trajectory(self.cm, e.t, b["in_index"], b["out_index"], substeps=int(m),
-                          hold=e.hold, jit=jit, smooth=self.smooth)
+                          hold=e.hold, jit=self._use_jit(e.n * m), smooth=self.smooth)
 
     def _signals(self, b, Y) -> list:
         """The model signals compared with the data (rates as increments per sample)."""
@@ -446,9 +449,7 @@ class EstimationProblem:
         step-doubling estimate (``m`` against ``2m`` substeps, at the parameter vector
         ``p``) is at most ``substep_tol``. Doubles from the first ``m >= start`` that
         puts every clock tick on a substep end, then tries a count between the last two
-        (predicted from the observed order, checked against the ``2m`` solution). Its
-        trajectories run in native code where the fit's would (`_use_jit`): the chosen one
-        then serves the fit as it is, and the checks run at the fit's speed."""
+        (predicted from the observed order, checked against the ``2m`` solution)."""
         e = b["exp"]
         top = self.max_substeps
         base = int(start)
@@ -460,7 +461,7 @@ class EstimationProblem:
 
         def traj(k):
             if k not in cache:
-                cache[k] = self._trajectory(b, k, self._use_jit(e.n * k))
+                cache[k] = self._trajectory(b, k)
             return cache[k]
 
         tol = self.substep_tol * std_scale
@@ -506,8 +507,7 @@ class EstimationProblem:
         out = {}
         for b in self.bound:
             p, x0 = self._point(b, theta)
-            m = 2 * b["substeps"]
-            fine = self._trajectory(b, m, self._use_jit(b["exp"].n * m))
+            fine = self._trajectory(b, 2 * b["substeps"])
             out[b["exp"].name] = self._error_between(b, p, x0, b["traj"], fine)
         return out
 
@@ -594,7 +594,7 @@ class EstimationProblem:
             if traj is None:
                 if m == b["substeps"]:
                     continue
-                traj = self._trajectory(b, m, self._use_jit(b["exp"].n * m))
+                traj = self._trajectory(b, m)
                 traj.check_ticks(b["p"])
             if traj is not b["traj"] or m != b["substeps"]:
                 b["traj"], b["substeps"] = traj, m
@@ -644,8 +644,7 @@ class EstimationProblem:
                 # chosen from the error estimate: check it at theta, and double as needed
                 p, x0 = self._point(b, theta)
                 m = b["substeps"]
-                fine = self._trajectory(b, 2 * m, self._use_jit(b["exp"].n * 2 * m))
-                err = self._error_between(b, p, x0, b["traj"], fine)
+                err = self._error_between(b, p, x0, b["traj"], self._trajectory(b, 2 * m))
                 if err <= self.substep_tol * std_scale or 2 * m > self.max_substeps:
                     continue
                 try:
@@ -653,7 +652,7 @@ class EstimationProblem:
                 except DataError as exc:
                     log.warning("estimate: %s", exc)
                     m = self.max_substeps
-                b["traj"] = self._trajectory(b, m, self._use_jit(b["exp"].n * m))
+                b["traj"] = self._trajectory(b, m)
                 b["traj"].check_ticks(b["p"])
                 b["substeps"] = m
                 changed = True
@@ -661,10 +660,7 @@ class EstimationProblem:
             m = self._substeps(b["exp"], b["p"], b["x0"], b["U"], b["in_labels"],
                                values, ratio, max_substeps, traj=b["traj"])
             if m > b["substeps"]:
-                tr = b["traj"]
-                b["traj"] = Trajectory(self.cm, tr.t, tr.input_index, tr.output_index,
-                                       substeps=m, hold=tr.hold,
-                                       jit=self._use_jit(tr.t.size * m), smooth=tr.smooth)
+                b["traj"] = self._trajectory(b, m)
                 b["traj"].check_ticks(b["p"])
                 b["substeps"] = m
                 changed = True
