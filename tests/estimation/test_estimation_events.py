@@ -119,6 +119,31 @@ def test_sensitivities_through_time_events_match_finite_differences():
                                    err_msg=n)
 
 
+def test_event_sensitivity_along_directions_equals_the_jacobian_product():
+    """The sensitivity step carries ``S`` through the events at a substep end along its
+    directions (one forward sweep per direction): the same as the Jacobians of the new
+    state times ``[S; D]``; where no event is due, state and ``S`` pass unchanged."""
+    cm = mt.compile_model(SampledPIServo())
+    t = np.round(np.arange(0, 0.2 + 1e-9, 0.01), 12)
+    traj = Trajectory(cm, t, [cm.param_names.index("r")], [cm.names.index("w")])
+    rng = np.random.default_rng(3)
+    D = rng.standard_normal((cm.p0.size, 3))
+    S = rng.standard_normal((cm.nx, 3))
+    x = np.array([0.4, -0.2, 0.9])[:cm.nx]
+    r = traj._rest0()
+    u, tick = np.array([1.2]), 0.05
+    switch = traj._event_switch_sens(ca.DM(D))
+    xn, rn, Sn = (np.array(v) for v in switch(1, x, r, cm.p0, u, tick, S))
+    xr, rr, jx, jp = (np.array(v) for v in traj._event_fn(x, r, cm.p0, u, tick))
+    np.testing.assert_array_equal(xn.ravel(), xr.ravel())
+    np.testing.assert_array_equal(rn.ravel(), rr.ravel())
+    np.testing.assert_allclose(Sn, jx @ S + jp @ D, rtol=1e-12, atol=1e-12)
+    assert not np.allclose(Sn, S)                   # the tick moved the controller
+    xs, rs, Ss = (np.array(v) for v in switch(0, x, r, cm.p0, u, tick, S))
+    np.testing.assert_array_equal(xs.ravel(), x)
+    np.testing.assert_array_equal(Ss, S)
+
+
 def test_sampled_controller_with_saturation_is_estimated_with_known_truth():
     t = np.round(np.arange(0, 4.0 + 1e-9, 0.01), 12)
     truth = {"K": 2.0, "tau": 0.3}

@@ -445,6 +445,7 @@ class Trajectory:
         pu = self._with_u(u)
         Xn = cm.f_events(t, ca.vertcat(self._x, self._r), ca.SX(0, 1), pu)
         xn = Xn[:cm.nx]
+        self._event_out = (u, t, Xn)
         fire = ca.Function("sample_events", [self._x, self._r, self._p, u, t],
                            [xn, Xn[cm.nx:], ca.jacobian(xn, self._x),
                             ca.jacobian(xn, self._p)])
@@ -473,6 +474,22 @@ class Trajectory:
         self._event_flag = ca.Function("events_due", [self._x, self._r, self._p, u, t, hs],
                                        [_any_of(flags)])
         return fire
+
+    def _event_switch_sens(self, Dm: ca.DM) -> ca.Function:
+        """``(due, x, r, p, u, t, S) -> (x+, r+, S+)``: the events at a substep end with
+        the sensitivity carried along the directions ``[S; Dm]`` of ``(x, p)``
+        (``S+ = dx+/dx S + dx+/dp Dm``), one forward sweep with ``q`` directions through
+        the event iteration. (The Jacobians of `_event_function` cost ``nx`` forward and
+        ``nx`` reverse sweeps, every sample where a clock ticks.)"""
+        nx = self.cm.nx
+        u, t, Xn = self._event_out
+        S = ca.SX.sym("S", nx, Dm.size2())
+        xn = Xn[:nx]
+        dxn = ca.jtimes(xn, ca.vertcat(self._x, self._p), ca.vertcat(S, Dm))
+        args = [self._x, self._r, self._p, u, t, S]
+        fire = ca.Function("sample_events_sens", args, [xn, Xn[nx:], dxn])
+        skip = ca.Function("no_events_sens", args, [self._x, self._r, S])
+        return ca.Function.conditional("sample_events_sens_if", [skip], fire)
 
     def _substep(self, xi, args):
         """One Radau substep from ``xi``: the new state and, per state, the scaled
@@ -541,6 +558,8 @@ class Trajectory:
             dK = -ca.solve(GK, ca.mtimes(Gx, Ss) + ca.mtimes(Gp, Dm))
             sub = ca.Function("radau_sensitivity", [self._K, Ss, ca.vertcat(*self._args)],
                               [dK[-nx:, :]])
+            if self.events:
+                switch = self._event_switch_sens(Dm)
         xi, ri, Si = x, r, S
         e = ca.DM.zeros(nx, 1)
         for j in range(m):
@@ -554,9 +573,10 @@ class Trajectory:
                 t_end = tk + h if j == m - 1 else tk + (j + 1) * h / m
                 ue = self._u_end(j, m)
                 due = self._event_flag(xi, ri, p, ue, t_end, h / m)
-                xi, ri, jx, jp = self._event_switch(due, xi, ri, p, ue, t_end)
                 if sens:
-                    Si = ca.mtimes(jx, Si) + ca.mtimes(jp, Dm)
+                    xi, ri, Si = switch(due, xi, ri, p, ue, t_end, Si)
+                else:
+                    xi, ri, _, _ = self._event_switch(due, xi, ri, p, ue, t_end)
         return h, tk, xi, ri, Si, e
 
     def _initial(self, x0, P, U0, S0=None, D=None):
