@@ -129,6 +129,39 @@ def test_native_code_gives_the_same_numbers(cm, tmp_path, monkeypatch):
     np.testing.assert_allclose(yb, ya, rtol=1e-10, atol=1e-12 * np.abs(ya).max())
 
 
+@pytest.mark.skipif(compiler() is None, reason="no C compiler on the PATH")
+def test_native_time_loop_gives_the_casadi_loops_numbers_bit_for_bit(cm, monkeypatch):
+    """With native code the samples are stepped by a C loop (`_NativeLoop`), not by
+    CasADi's ``mapaccum`` of the same compiled step: the same arithmetic, so the same
+    bits, for the trajectory and its sensitivities; without a compiler the CasADi loop
+    runs instead."""
+    import mechatron.estimation.discretize as dz
+    import mechatron.estimation.native as nat
+    t, volts, free, D, S0 = sens_setup(cm)
+    args = (cm, t, [cm.param_names.index("source.V")],
+            [cm.names.index("inductor.i"), cm.names.index("inertia.w")])
+    x0 = np.array([0.1, 5.0])
+    a = Trajectory(*args, substeps=2, jit=True)
+    assert a._loop is not None and a._mx is None         # no mapaccum built
+    Y, X = a(cm.p0, x0, volts)
+    Yc, Xc, _ = a._mx_functions()[1](cm.p0, x0, volts)
+    np.testing.assert_array_equal(Y, Yc.full())
+    np.testing.assert_array_equal(X, Xc.full())
+    sens = a.sensitivity_function(D)
+    assert isinstance(sens.fn, dz._NativeLoop)
+    with monkeypatch.context() as m:
+        m.setattr(dz._NativeLoop, "build", classmethod(lambda cls, *a: None))
+        b = Trajectory(*args, substeps=2, jit=True)
+        casadi_sens = b.sensitivity_function(D)
+    assert b._loop is None and isinstance(casadi_sens.fn, ca.Function)
+    for mine, theirs in zip(sens(cm.p0, x0, volts, S0), casadi_sens(cm.p0, x0, volts, S0)):
+        np.testing.assert_array_equal(mine, theirs)
+    monkeypatch.setattr(nat, "compiler", lambda: None)
+    c = Trajectory(*args, substeps=2, jit=True)
+    assert c._loop is None
+    np.testing.assert_allclose(c(cm.p0, x0, volts)[0], Y, rtol=1e-12, atol=1e-14)
+
+
 def test_state_events_are_refused_without_the_smooth_approximation():
     class Clamp(mt.Component):
         x = mt.Variable("1", start=0.0)

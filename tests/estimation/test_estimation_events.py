@@ -13,6 +13,7 @@ import mechatron as mt
 from mechatron.errors import DataError, ModelError
 from mechatron.estimation import EstimationProblem, Experiment, estimate
 from mechatron.estimation.discretize import Trajectory, state_event_relations
+from mechatron.estimation.native import compiler
 
 
 class SampledPIServo(mt.Component):
@@ -142,6 +143,34 @@ def test_event_sensitivity_along_directions_equals_the_jacobian_product():
     xs, rs, Ss = (np.array(v) for v in switch(0, x, r, cm.p0, u, tick, S))
     np.testing.assert_array_equal(xs.ravel(), x)
     np.testing.assert_array_equal(Ss, S)
+
+
+@pytest.mark.skipif(compiler() is None, reason="no C compiler on the PATH")
+def test_native_time_loop_steps_through_the_events_like_the_casadi_loop():
+    """The C loop over the samples gives the bits of CasADi's ``mapaccum`` of the same
+    compiled step on a model with clock ticks, a saturation and a held input: outputs,
+    states and sensitivities."""
+    t = np.round(np.arange(0, 2.0 + 1e-9, 0.01), 12)
+    cm = mt.compile_model(SampledPIServo())
+    traj = Trajectory(cm, t, [cm.param_names.index("r")],
+                      [cm.names.index("w"), cm.names.index("u")], substeps=2, jit=True)
+    assert traj._loop is not None
+    U = _reference(t)[None, :]
+    x0 = np.array(cm.x_start[:cm.nx])
+    Y, X = traj(cm.p0, x0, U)
+    Yc, Xc, _ = traj._mx_functions()[1](cm.p0, x0, U)
+    np.testing.assert_array_equal(Y, Yc.full())
+    np.testing.assert_array_equal(X, Xc.full())
+    assert np.max(np.abs(Y[1])) == pytest.approx(1.0)      # the limit is reached
+    D = np.eye(cm.p0.size)[:, [cm.param_names.index(n) for n in ("K", "Kp", "Ki")]]
+    S0 = np.zeros((cm.nx, 3))
+    Y1, dY = traj.sensitivity_function(D)(cm.p0, x0, U, S0)
+    traj._loop = None                           # the same trajectory's CasADi loop
+    traj._sens.clear()
+    traj.jit = False
+    Y2, dY2 = traj.sensitivity_function(D)(cm.p0, x0, U, S0)
+    np.testing.assert_allclose(dY, dY2, rtol=1e-12, atol=1e-12 * np.abs(dY2).max())
+    np.testing.assert_allclose(Y1, Y2, rtol=1e-12, atol=1e-14)
 
 
 def test_sampled_controller_with_saturation_is_estimated_with_known_truth():

@@ -213,7 +213,6 @@ class ResponseProblem:
         q = len(self.design)
         Y, dY = self._sens(self.parameters(x), np.asarray(self.cm.x_start[:self.cm.nx]),
                            np.zeros((0, self.t.size)), np.zeros((self.cm.nx, q)))
-        Y, dY = Y.full(), dY.full()
         n = len(self.signal_names)
         ys = {s: Y[r] for r, s in enumerate(self.signal_names)}
         ds = {s: dY[r::n, :].T for r, s in enumerate(self.signal_names)}

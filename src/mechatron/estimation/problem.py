@@ -770,7 +770,7 @@ class EstimationProblem:
             p, x0 = self._point(b, theta)
             f = b["traj"].sensitivity_function(b["D"])
             Y, dY = f(p, x0, b["U"], b["S0"])
-            r, J = self._assemble(b, theta, Y.full(), dY.full())
+            r, J = self._assemble(b, theta, Y, dY)
             rs.append(r)
             js.append(J)
         return np.concatenate(rs), np.vstack(js)
