@@ -749,9 +749,9 @@ class Trajectory:
                           ca.DM(self.t[:-1].reshape(1, -1)))
 
     # ------------------------------------------------------------------------------------
-    def sensitivity_function(self, D: np.ndarray) -> ca.Function:
-        """``(p, x0, U, S0) -> (Y, dY)``: outputs and their derivatives along ``q``
-        directions. ``D`` (npar x q) maps the directions to parameters; ``S0`` (nx x q)
+    def sensitivity_function(self, D: np.ndarray) -> _Checked:
+        """``(p, x0, U, S0) -> (Y, dY)``, NumPy arrays: outputs and their derivatives along
+        ``q`` directions. ``D`` (npar x q) maps the directions to parameters; ``S0`` (nx x q)
         is ``dx0/dtheta``. ``dY`` is ``(n_out * q, N)``: column ``k`` holds
         ``vec(dy_k/dtheta)`` (column-major, output index fastest)."""
         D = np.asarray(D, dtype=float)
