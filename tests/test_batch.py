@@ -79,6 +79,24 @@ def test_a_killed_worker_s_task_is_rerun(client, cm, tmp_path):
     assert got == local
 
 
+def test_a_lost_shared_object_is_scattered_again(cm, tmp_path):
+    """A cluster of one worker: the worker that dies takes the only copy of the shared
+    model with it (the scheduler cannot recompute scattered data). The nanny starts a new
+    worker; the model is scattered to it again and the blocks not yet done rerun."""
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0", silence_logs=50) as cluster, \
+            distributed.Client(cluster) as cl:
+        job = {"model": cm, "marker": str(tmp_path / "killed"), "victim": 5.0}
+        blocks = [3.0, 5.0, 7.0]
+        seen = []
+        got = batch.map_blocks(_once_then_die, job, blocks, client=cl,
+                               progress=lambda k, n: seen.append((k, n)))
+        assert (tmp_path / "killed").exists()           # the worker did die
+    want = [2.0 * (1.0 - np.exp(-0.02 / (R * 1e-3))) for R in blocks]
+    np.testing.assert_allclose(got, want, atol=1e-7)
+    assert seen == [(1, 3), (2, 3), (3, 3)]             # each block reported once, in order
+
+
 def _shipped(job, block):
     return os.getpid(), batch.received()
 

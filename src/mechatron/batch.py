@@ -12,7 +12,10 @@ function over blocks of those points:
   (the compiled model, a problem) is scattered to every worker once
   (``broadcast=True``), so each worker unpickles it once, not once per block; each block
   is a task that is retried (``retries``) if it fails, and a block whose worker dies is
-  rerun by the scheduler on another worker. Results come back in the order of the blocks,
+  rerun by the scheduler on another worker. If the shared object itself is lost (the
+  scheduler's memory manager may keep one replica of scattered data, and a worker that
+  dies with the last one takes it along), it is scattered again and the blocks not yet
+  collected rerun, up to ``retries`` times. Results come back in the order of the blocks,
   so a run on a cluster gives the same numbers as a local one.
 
 :func:`received` counts, in the calling process, how many times a shared object was
@@ -23,7 +26,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import CancelledError, ProcessPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -123,13 +126,29 @@ def map_blocks(fn: Callable[[Any, Any], Any], shared: Any, blocks: Sequence, *,
     if client is not None or address:
         cl, owned = _client(client, address)
         try:
-            remote = cl.scatter(Shared(shared), broadcast=True, hash=False)
-            futures = [cl.submit(_call, fn, remote, block, pure=False, retries=retries)
-                       for block in blocks]
-            for k, fut in enumerate(futures):
-                out[k] = fut.result()
-                if progress:
-                    progress(k + 1, n)
+            k, lost = 0, 0
+            while k < n:
+                remote = cl.scatter(Shared(shared), broadcast=True, hash=False)
+                futures = [cl.submit(_call, fn, remote, block, pure=False, retries=retries)
+                           for block in blocks[k:]]
+                try:
+                    for fut in futures:
+                        out[k] = fut.result()
+                        k += 1
+                        if progress:
+                            progress(k, n)
+                except CancelledError:
+                    # the shared object's last copy died with a worker (the scheduler
+                    # may keep a single replica of scattered data, and cannot recompute
+                    # it): scatter it again and rerun the blocks not yet collected
+                    cl.cancel(futures)
+                    lost += 1
+                    if lost > retries:
+                        raise RuntimeError(
+                            f"batch: the cluster lost the shared object with the worker "
+                            f"that held it {lost} times ({k} of {n} blocks done); check "
+                            "the workers' logs for why they die (memory limits?), or "
+                            "allow more retries.") from None
         finally:
             if owned:
                 cl.close()
