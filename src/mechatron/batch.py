@@ -112,7 +112,8 @@ def map_blocks(fn: Callable[[Any, Any], Any], shared: Any, blocks: Sequence, *,
     address : str, optional
         Or connect to the Dask scheduler at this address (closed again at the end).
     retries : int
-        Times a failed task is rerun on the cluster.
+        Times a failed task is rerun on the cluster, and times the shared object is
+        scattered again after the cluster lost it.
     progress : callable, optional
         Called with (blocks done, blocks) as results arrive, in block order.
 
