@@ -18,7 +18,9 @@ from __future__ import annotations
 import json
 import math
 import os
+import secrets
 import select
+import shutil
 import signal
 import subprocess
 import tempfile
@@ -304,8 +306,15 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
     tmp = None
     try:
         if build_dir is None:
-            tmp = tempfile.TemporaryDirectory(prefix="mechatron-hil-")
-            build_dir = tmp.name
+            # named before it exists, so that an interrupt (Ctrl-C, SIGTERM) arriving
+            # right after the folder is made still finds it in the finally below
+            while tmp is None:
+                tmp = _new_temporary_name("mechatron-hil-")
+                try:
+                    os.mkdir(tmp, 0o700)
+                except FileExistsError:     # made by another process meanwhile: not ours
+                    tmp = None
+            build_dir = tmp
         out = Path(build_dir)
         if transport == "sim":
             res = _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
@@ -315,7 +324,7 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
                        seed, out, steps, pil_timeout, lockstep or mode == "pil")
     finally:
         if tmp is not None:
-            tmp.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
     res.max_overruns = max_overruns
     if res.over_budget:
         msg = (f"hil {name}: {res.runner['overruns']} overruns in {res.runner['steps']} "
@@ -324,6 +333,16 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
         res.notes.append(msg)
         warnings.warn(msg + ".", OverrunWarning, stacklevel=2)
     return res
+
+
+def _new_temporary_name(prefix: str) -> str:
+    """A path in the temporary directory that does not exist yet (``prefix`` and 16 random
+    hexadecimal digits); the caller creates it (``os.mkdir``, which refuses a path made
+    meanwhile)."""
+    while True:
+        path = os.path.join(tempfile.gettempdir(), prefix + secrets.token_hex(8))
+        if not os.path.exists(path):
+            return path
 
 
 def _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
