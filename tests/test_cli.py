@@ -454,3 +454,28 @@ def test_some_plots_lack_quantity_names_and_units(capsys, tmp_path, saved_figure
     assert code == 0, out + err
     assert saved_figures, "the command saved no figure"
     assert saved_figures.problems() == []
+
+
+def test_an_interrupt_inside_a_c_extension_still_exits_as_interrupted(monkeypatch, capsys):
+    """SIGTERM arriving while CasADi converts a matrix surfaces as a SystemError whose
+    context is the interrupt: the command still exits 143 (130 for Ctrl-C), not as a bug."""
+    from mechatron import cli
+
+    def command(kind):
+        def run(args):
+            try:
+                raise kind()
+            except kind as stop:
+                raise SystemError("<function DM.__array__> returned a result with an "
+                                  "exception set") from stop
+        return run
+
+    for kind, code, said in ((cli.Terminated, 143, "terminated"),
+                             (KeyboardInterrupt, 130, "interrupted")):
+        args = type("Args", (), {"func": staticmethod(command(kind)), "verbose": 0,
+                                 "verbose_command": 0})()
+        monkeypatch.setattr(cli, "build_parser", lambda: type(
+            "Parser", (), {"parse_args": lambda self, argv: args})())
+        assert cli.main([]) == code
+        err = capsys.readouterr().err
+        assert said in err and "bug" not in err

@@ -1304,6 +1304,19 @@ def _catch_sigterm() -> Callable[[], None]:
     return undo
 
 
+def _interrupt_within(exc: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM behind ``exc``, if any: a signal that arrives while a C
+    extension runs (CasADi converting a matrix) surfaces as a ``SystemError`` whose
+    context is the interrupt, after the same clean-up."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``mechatron`` command with ``argv`` (default: ``sys.argv[1:]``).
 
@@ -1333,6 +1346,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except USER_ERRORS as exc:
         return _fail(str(exc), EXIT_USAGE)
     except Exception as exc:  # a bug: still one line, the traceback on request
+        stop = _interrupt_within(exc)
+        if isinstance(stop, Terminated):
+            print("error: terminated (SIGTERM); temporary files removed.", file=sys.stderr)
+            return 143
+        if stop is not None:
+            print("error: interrupted.", file=sys.stderr)
+            return 130
         return _fail(f"unexpected {type(exc).__name__}: {exc} (a bug in Mechatron; "
                      f"run with MECHATRON_DEBUG=1 for the traceback and report it)",
                      EXIT_FAILURE)
