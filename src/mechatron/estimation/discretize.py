@@ -634,27 +634,12 @@ class Trajectory:
         checked)``, the second with the convergence measure as a third output."""
         if self._mx is not None:
             return self._mx
-        cm = self.cm
-        nx, npar, nu = cm.nx, cm.p0.size, len(self.input_index)
-        nr3 = self._r.numel()
-        step, out = self._parts
-        if self.jit:
-            step, out = native(step), native(out)
-        N = self.t.size
-        x0 = ca.MX.sym("x0", nx)
-        P = ca.MX.sym("p", npar)
-        U = ca.MX.sym("U", nu, N)
-        xa0 = self._start()(P, x0, U[:, 0])
-        if N > 1:
-            Xr, E = step.mapaccum("run", N - 1)(xa0, self._run_args(P, U))
-            Xs = ca.horzcat(xa0, Xr)
-        else:
-            Xs, E = xa0, ca.MX(nx, 0)
-        Y = out.map(N)(ca.DM(self.t.reshape(1, -1)), Xs, ca.repmat(P, 1, N), U)
-        Xc = Xs[:nx, :] if nr3 else Xs
-        checked = ca.Function("trajectory_checked", [P, x0, U], [Y, Xc, E],
+        nx = self.cm.nx
+        args, (Y,), Xs, E = self._casadi_loop("run", *self._parts, self._start())
+        Xc = Xs[:nx, :] if self._r.numel() else Xs
+        checked = ca.Function("trajectory_checked", args, [Y, Xc, E],
                               ["p", "x0", "U"], ["Y", "X", "newton"])
-        function = ca.Function("trajectory", [P, x0, U], [Y, Xc], ["p", "x0", "U"],
+        function = ca.Function("trajectory", args, [Y, Xc], ["p", "x0", "U"],
                                ["Y", "X"])
         self._mx = (function, checked)
         return self._mx
@@ -742,6 +727,28 @@ class Trajectory:
             "parameters in a plausible range (bounds): a stiff or wildly scaled model "
             "needs shorter steps.", path=self.cm.name, variables=names)
 
+    def _casadi_loop(self, name: str, step: ca.Function, out: ca.Function,
+                     start: ca.Function, *extra: ca.MX) -> tuple[list, list, ca.MX, ca.MX]:
+        """The time loop in CasADi (where no `_NativeLoop` runs it): the start state,
+        ``step`` accumulated over the sample intervals (a ``mapaccum`` named ``name``) and
+        ``out`` mapped over the samples. Returns the inputs ``[p, x0, U, *extra]``, the
+        outputs of ``out`` (each ``(n, N)``), the integration states ``(n, N)`` and the
+        convergence measure ``(nx, N - 1)``."""
+        if self.jit:
+            step, out = native(step), native(out)
+        N = self.t.size
+        x0 = ca.MX.sym("x0", self.cm.nx)
+        P = ca.MX.sym("p", self.cm.p0.size)
+        U = ca.MX.sym("U", len(self.input_index), N)
+        xa0 = start(P, x0, U[:, 0], *extra)
+        if N > 1:
+            XR, E = step.mapaccum(name, N - 1)(xa0, self._run_args(P, U))
+            XA = ca.horzcat(xa0, XR)
+        else:
+            XA, E = xa0, ca.MX(self.cm.nx, 0)
+        outs = out.map(N).call([ca.DM(self.t.reshape(1, -1)), XA, ca.repmat(P, 1, N), U])
+        return [P, x0, U, *extra], outs, XA, E
+
     def _run_args(self, P, U):
         N = self.t.size
         return ca.vertcat(ca.repmat(P, 1, N - 1), U[:, :-1], U[:, 1:],
@@ -758,9 +765,7 @@ class Trajectory:
         key = D.tobytes() + bytes(str(D.shape), "ascii")
         if key in self._sens:
             return self._sens[key]
-        cm = self.cm
-        nx, npar, nu = cm.nx, cm.p0.size, len(self.input_index)
-        q = D.shape[1]
+        nx, q = self.cm.nx, D.shape[1]
         x, r, p, u0 = self._x, self._r, self._p, self._u0
         Dm = ca.DM(D)
         # implicit function theorem on the stage residual G(K, x, p) = 0, and the chain
@@ -779,21 +784,9 @@ class Trajectory:
         if loop is not None:
             f = self._sens[key] = _Checked(loop, self)
             return f
-        if self.jit:
-            step, out = native(step), native(out)
-        N = self.t.size
-        x0 = ca.MX.sym("x0", nx)
         S0 = ca.MX.sym("S0", nx, q)
-        P = ca.MX.sym("p", npar)
-        U = ca.MX.sym("U", nu, N)
-        xa0 = self._start(D)(P, x0, U[:, 0], S0)
-        if N > 1:
-            XR, E = step.mapaccum("run_sens", N - 1)(xa0, self._run_args(P, U))
-            XA = ca.horzcat(xa0, XR)
-        else:
-            XA, E = xa0, ca.MX(nx, 0)
-        Y, dY = out.map(N)(ca.DM(self.t.reshape(1, -1)), XA, ca.repmat(P, 1, N), U)
-        f = _Checked(ca.Function("trajectory_sens", [P, x0, U, S0], [Y, dY, E],
+        args, (Y, dY), _, E = self._casadi_loop("run_sens", step, out, self._start(D), S0)
+        f = _Checked(ca.Function("trajectory_sens", args, [Y, dY, E],
                                  ["p", "x0", "U", "S0"], ["Y", "dY", "newton"]), self)
         self._sens[key] = f
         return f
