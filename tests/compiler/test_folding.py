@@ -96,8 +96,8 @@ def test_folded_ports_give_the_model_of_the_written_out_ports(build, t_end, monk
     flat = flatten(build())
     assert flat.folded, "nothing was folded"
     # no variable of a folded port is an unknown of the flat model
-    for port in flat.folded:
-        assert not [n for n in flat.variables if n.startswith(port.path + ".")]
+    for path in flat.folded.ports:
+        assert not [n for n in flat.variables if n.startswith(path + ".")]
     assert_same(mt.compile_model(build()), unfolded(monkeypatch, build), t_end)
 
 
@@ -167,7 +167,7 @@ def reading_model():
 
 def test_a_port_read_by_an_equation_is_written_out(monkeypatch):
     flat = flatten(reading_model())
-    folded = {port.path for port in flat.folded}
+    folded = set(flat.folded.ports)
     assert "s.p" not in folded and {"s.n", "s.gnd"} <= folded
     # in its place of declaration, as if never folded
     names = list(flat.variables)

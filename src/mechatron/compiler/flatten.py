@@ -345,18 +345,29 @@ class _RowsOf:
         return len(self.variables)
 
 
-class FoldedPort:
-    """A folded subsystem port: each of its variables is the sum of the model variables
-    in ``terms`` (their rows, one list per variable in declaration order): an across
-    variable that of the node's first member, a through variable those of the inside
-    members of its set."""
+class FoldedColumns:
+    """The variables of the folded subsystem ports, in bulk, ordered by ``position``
+    (tree order), a port's variables together in declaration order: their ``names``,
+    ``units`` and ``docs``, each one's ``position`` (logged after the first ``position``
+    variables of the model), its port's ``order`` in the tree (to place ports bound late,
+    `_declaration_order`) and its ``terms``, the rows of the model variables it sums (an
+    across variable the node's first member's, a through variable those of the inside
+    members of its set)."""
 
-    __slots__ = ("path", "cls", "terms", "position", "order")
+    __slots__ = ("names", "units", "docs", "position", "order", "terms")
 
-    def __init__(self, path, cls, terms, position, order):
-        self.path, self.cls, self.terms = path, cls, terms
-        self.position = position    # how many model variables were declared before it
-        self.order = order
+    def __init__(self, names: list, units: list, docs: list, position: list,
+                 order: list, terms: list):
+        self.names, self.units, self.docs = names, units, docs
+        self.position, self.order, self.terms = position, order, terms
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    @property
+    def ports(self) -> list[str]:
+        """The paths of the folded ports, in order (for messages and tests)."""
+        return list(dict.fromkeys(name.rpartition(".")[0] for name in self.names))
 
 
 @dataclass(slots=True)
@@ -630,33 +641,25 @@ class FlatModel:
     initial_equations: list = field(default_factory=list)
     #: Subsystem ports folded into the nodes they join (:mod:`mechatron.compiler.folding`):
     #: their variables are never unknowns, and are logged from their node.
-    folded: list["FoldedPort"] = field(default_factory=list)
+    folded: FoldedColumns | None = None
 
     def folded_columns(self) -> tuple[list, list, list, np.ndarray, list]:
-        """The variables of the folded ports, in bulk: their names, units and docs, each
-        one's ``position`` (logged after the first ``position`` variables of the model)
-        and the ``rows`` of the model's variables it sums; ordered by position, a port's
-        variables together in declaration order."""
-        ports = sorted(self.folded, key=_position)         # stable: tree order kept
-        names: list = []
-        units: list = []
-        docs: list = []
-        terms: list = []
-        for port in ports:
-            keys, port_units, port_docs = _folded_plan(port.cls)
-            prefix = port.path + "."
-            names += [prefix + k for k in keys]
-            units += port_units
-            docs += port_docs
-            terms += port.terms
-        position = np.repeat(np.array([port.position for port in ports], dtype=np.intp),
-                             [len(port.terms) for port in ports])
-        return names, units, docs, position, terms
+        """The variables of the folded ports (`FoldedColumns`): their names, units and
+        docs, each one's position and the rows of the model's variables it sums."""
+        f = self.folded
+        if f is None:
+            return [], [], [], np.zeros(0, dtype=np.intp), []
+        position = np.array(f.position, dtype=np.intp)
+        if np.any(position[1:] < position[:-1]):    # (tree order keeps them sorted)
+            k = np.argsort(position, kind="stable").tolist()
+            return ([f.names[i] for i in k], [f.units[i] for i in k],
+                    [f.docs[i] for i in k], position[k], [f.terms[i] for i in k])
+        return f.names, f.units, f.docs, position, f.terms
 
     @property
     def n_folded(self) -> int:
         """How many variables the folded ports hold."""
-        return sum(len(port.terms) for port in self.folded)
+        return len(self.folded) if self.folded is not None else 0
 
     @property
     def time(self) -> ca.SX:
@@ -857,10 +860,12 @@ def _declaration_order(flat: FlatModel) -> None:
     flat.aliases = [(moved_to[a] if type(a) is int else a,
                      moved_to[b] if type(b) is int else b, k, origin)
                     for a, b, k, origin in flat.aliases]
-    for port in flat.folded:        # still folded: after the ports declared before it
-        port.position += sum(len(names) for position, k, names in late
-                             if (position, k) < (port.position, port.order))
-        port.terms = [[moved_to[r] for r in rows] for rows in port.terms]
+    folded = flat.folded
+    if folded is not None:      # still folded: after the ports declared before it
+        folded.position = [p + sum(len(names) for position, k, names in late
+                                   if (position, k) < (p, o))
+                           for p, o in zip(folded.position, folded.order)]
+        folded.terms = [[moved_to[r] for r in rows] for rows in folded.terms]
 
 
 class _Problems(list):
@@ -1244,9 +1249,6 @@ class _FoldedSymbols(dict):
     def __missing__(self, key):
         self.unfold()
         return dict.__getitem__(self, key)
-
-
-_position = attrgetter("position")
 
 
 @functools.lru_cache(maxsize=None)
@@ -2243,11 +2245,12 @@ class _Joined:
 
 
 def _folded_variables(flat: FlatModel, folded, folding) -> None:
-    """Record the folded ports, for logging their variables (`FlatModel.folded`): the
-    rows of the variables each one sums, read off the rows of the member ports (each
-    port's own class places the key)."""
+    """Record the variables of the folded ports, for logging them (`FlatModel.folded`, a
+    `FoldedColumns`): the rows of the variables each one sums, read off the rows of the
+    member ports (each port's own class places the key), in one pass over the ports."""
     node, flow, late = folding.node, folding.flow, flat.__dict__.get("_rows", {})
     offsets = {}            # class -> {key: place among its variables}
+    plans = {}              # class of a folded port -> its keys, units, docs, kinds
 
     def place(port):
         """The row of ``port``'s first variable, and its class's offsets of keys."""
@@ -2259,15 +2262,32 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
             raise AssertionError(f"port '{port.path}' of a folded node has no variables")
         return row, at
 
-    out = []
+    names: list = []
+    units: list = []
+    docs: list = []
+    position: list = []
+    order: list = []
+    terms: list = []
     for pid, port in folded.items():
+        cls = type(port)
+        plan = plans.get(cls)
+        if plan is None:
+            keys, port_units, port_docs = _folded_plan(cls)
+            kinds = [(key, kind == "across") for key, kind, *_ in _declaration_plan(cls)[1]]
+            plan = plans[cls] = (keys, port_units, port_docs, kinds)
+        keys, port_units, port_docs, kinds = plan
         b0, o0 = place(node[pid].port)
         inside = [place(m.port) for m in flow[pid]]
-        terms = [[b0 + o0[key]] if kind == "across" else [b + o[key] for b, o in inside]
-                 for key, kind, *_ in _declaration_plan(type(port))[1]]
+        terms += [[b0 + o0[key]] if across else [b + o[key] for b, o in inside]
+                  for key, across in kinds]
+        prefix = port.path + "."
+        names += [prefix + k for k in keys]
+        units += port_units
+        docs += port_docs
         syms = port._syms
-        out.append(FoldedPort(port.path, type(port), terms, syms.position, syms.order))
-    flat.folded = out
+        position += [syms.position] * len(keys)
+        order += [syms.order] * len(keys)
+    flat.folded = FoldedColumns(names, units, docs, position, order, terms)
 
 
 @functools.lru_cache(maxsize=None)
