@@ -144,6 +144,31 @@ def test_estimation_data_save_is_all_or_nothing(tmp_path, monkeypatch):
     assert path.read_text() == before and _listing(tmp_path) == ["step.csv"]
 
 
+def test_compiled_model_save_is_all_or_nothing(tmp_path, monkeypatch):
+    """An interrupted save keeps the model saved before; a damaged file is a DataError
+    that names it, not a raw unpickling error."""
+    import pickle
+    from mechatron.errors import DataError
+    cm = mt.compile_model(_rc())
+    path = cm.save(tmp_path / "rc.mtm")
+    before = path.read_bytes()
+
+    def half_written(obj, fh, protocol=None):
+        fh.write(before[:len(before) // 2])
+        raise KeyboardInterrupt
+    monkeypatch.setattr(pickle, "dump", half_written)
+    with pytest.raises(KeyboardInterrupt):
+        cm.save(path)
+    monkeypatch.undo()
+    assert path.read_bytes() == before and _listing(tmp_path) == ["rc.mtm"]
+    back = mt.CompiledModel.load(path)
+    assert back.names == cm.names and back.state_names == cm.state_names
+    damaged = tmp_path / "half.mtm"
+    damaged.write_bytes(before[:len(before) // 2])
+    with pytest.raises(DataError, match="half.mtm: not a readable saved CompiledModel"):
+        mt.CompiledModel.load(damaged)
+
+
 def _rc():
     from mechatron.library import electrical as el
     m = mt.System("rc")

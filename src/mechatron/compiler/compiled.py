@@ -144,9 +144,12 @@ class CompiledModel:
 
     # -- persistence ----------------------------------------------------------------------
     def save(self, path) -> Path:
-        """Save to a file (functions serialized by CasADi); :meth:`load` reads it back."""
+        """Save to a file (functions serialized by CasADi); :meth:`load` reads it back.
+        All or nothing (`mechatron._io.atomic_path`): an interrupted save leaves the file
+        that was there before."""
+        from mechatron._io import atomic_path
         path = Path(path)
-        with open(path, "wb") as fh:
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             pickle.dump(self, fh, protocol=pickle.HIGHEST_PROTOCOL)
         return path
 
@@ -157,7 +160,14 @@ class CompiledModel:
             raise DataError(f"{path}: no such file. Save a model with "
                             "CompiledModel.save(path) first.", path=str(path))
         with open(path, "rb") as fh:
-            obj = pickle.load(fh)
+            try:
+                obj = pickle.load(fh)
+            except (pickle.UnpicklingError, EOFError, AttributeError, ImportError,
+                    IndexError, TypeError, ValueError, RuntimeError) as exc:
+                raise DataError(f"{path}: not a readable saved CompiledModel (truncated or "
+                                f"damaged: {type(exc).__name__}: {exc}). Save the model "
+                                "again with CompiledModel.save(path).",
+                                path=str(path)) from exc
         if not isinstance(obj, cls):
             raise DataError(f"{path}: not a saved CompiledModel.", path=str(path))
         return obj
