@@ -47,13 +47,22 @@ def test_local_processes_give_the_serial_rows(serial):
     assert _numbers(run_regression(NAMES, workers=2)) == _numbers(serial)
 
 
-def test_a_local_cluster_of_two_workers_gives_the_serial_rows(serial):
+def test_a_local_cluster_of_two_workers_gives_the_serial_rows(serial, monkeypatch):
+    """Also for an entry registered here at run time, which the workers' own database
+    lacks: it travels with the tasks."""
     distributed = pytest.importorskip("distributed")
+    mine = dataclasses.replace(mt.models.get("msd_vertical"), name="msd_registered_here",
+                               variants={k: (lambda f: lambda **kw: f(**kw))(f) for k, f
+                                         in mt.models.get("msd_vertical").variants.items()})
+    monkeypatch.setitem(registry._REGISTRY, mine.name, mine)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None, silence_logs=40) as cluster, \
             distributed.Client(cluster) as client:
-        remote = run_regression(NAMES, client=client)
-    assert _numbers(remote) == _numbers(serial)
+        remote = run_regression(NAMES + [mine.name], client=client)
+    assert _numbers(remote[:-1]) == _numbers(serial)
+    here = check_model(mine)
+    assert remote[-1]["model"] == mine.name and here["passed"]
+    assert _numbers(remote[-1:]) == _numbers([here])
 
 
 def test_a_wrong_expected_value_fails_its_row_and_the_command(monkeypatch, capsys):

@@ -11,10 +11,10 @@ variants from the reference (relative to the reference's peak, limit
 Dask cluster (a task whose worker dies is rerun elsewhere); the rows come back in the
 order of the names, with the same numbers wherever they ran (the wall times aside).
 
-Workers look the models up by name in their own database: an entry registered at run
-time (``mechatron.models.register``) exists only in the process that registered it, so
-it runs there (``workers=1``) or must come from an installed package (the
-``mechatron.models`` entry point group) to run elsewhere.
+Local worker processes are forked from this one and find every entry here. On a Dask
+cluster the entries travel with the tasks (once per worker, pickled by value where they
+must be): a worker's own database lacks an entry registered at run time
+(``mechatron.models.register``), and may come from another installation.
 """
 
 from __future__ import annotations
@@ -34,16 +34,18 @@ def _relative(deviation: float, scale: float) -> float:
     return relative(deviation, scale)
 
 
-def check_model(name: str, *, points: int = POINTS) -> dict:
+def check_model(name, *, points: int = POINTS) -> dict:
     """One model's regression row: ``model``, ``variants``, ``reference``, ``expected``
     (per label: ``value``, ``expected``, ``rel_error``), ``expected_worst`` and
     ``expected_tolerance``, ``variants_worst`` (0 for one variant) and
     ``variant_tolerance``, ``passed``, ``error`` (None, or the failure's message) and
-    ``wall_time_s`` (simulation wall time of the variants)."""
+    ``wall_time_s`` (simulation wall time of the variants). ``name`` is a database
+    name or the `ModelEntry` itself."""
     import mechatron as mt
     from mechatron.errors import MechatronError
     from mechatron.models.compare import compare_variants
-    entry = mt.models.get(name)
+    from mechatron.models.entry import ModelEntry
+    entry = name if isinstance(name, ModelEntry) else mt.models.get(name)
     row = {"model": entry.name, "variants": [], "reference": None, "expected": {},
            "expected_worst": math.nan, "expected_tolerance": entry.expected_tolerance,
            "variants_worst": math.nan, "variant_tolerance": entry.variant_tolerance,
@@ -69,9 +71,10 @@ def check_model(name: str, *, points: int = POINTS) -> dict:
     return row
 
 
-def _check_block(points, name):
+def _check_block(shared, name):
+    points, entries = shared
     t0 = time.perf_counter()
-    row = check_model(name, points=points)
+    row = check_model(entries.get(name, name), points=points)
     row["task_wall_time_s"] = time.perf_counter() - t0
     return row
 
@@ -99,7 +102,10 @@ def run_regression(names: Sequence[str] | None = None, *, points: int = POINTS,
     """
     import mechatron as mt
     from mechatron.batch import map_blocks
-    names = [e.name for e in mt.models.list()] if names is None else \
-        [mt.models.get(n).name for n in names]           # unknown names fail here
-    return map_blocks(_check_block, int(points), names, workers=workers, client=client,
-                      address=address, progress=progress)
+    entries = mt.models.list() if names is None else \
+        [mt.models.get(n) for n in names]                # unknown names fail here
+    names = [e.name for e in entries]
+    # a cluster's workers get the entries themselves (see the module's docstring)
+    shipped = {e.name: e for e in entries} if client is not None or address else {}
+    return map_blocks(_check_block, (int(points), shipped), names, workers=workers,
+                      client=client, address=address, progress=progress)
