@@ -13,7 +13,6 @@ from collections.abc import (ItemsView, Mapping, MutableMapping, MutableSequence
                              ValuesView)
 from dataclasses import dataclass, field
 from itertools import repeat
-from operator import attrgetter
 
 import casadi as ca
 import numpy as np
