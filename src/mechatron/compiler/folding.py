@@ -182,19 +182,20 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
         if cset.is_signal:
             continue
         members = cset.members
-        if not any(id(m.port) in where for m in members):
-            groups.append(members)
-            continue
         node, ports = [], []
         for m in members:
-            if id(m.port) in where and not m.outside:
-                inner, nested = expand.inner_of(m.port)
-                node.extend(inner)
-                ports.extend(nested)
-                expand.joined_outside.add(id(m.port))
+            port = m.port
+            if not m.outside and id(port) in where:
+                inner, nested = expand.inner_of(port)
+                node += inner
+                ports += nested
+                expand.joined_outside.add(id(port))
             else:
                 node.append(m)
-        _add(out, node, ports)
+        if ports:
+            _add(out, node, ports)
+        else:                   # no folded port inside it: the set as it is
+            groups.append(members)
     for el, plan in planned.values():
         children = el._children
         for owner, names_list in plan.sets:
@@ -234,30 +235,46 @@ class _Expansion:
     def members_of(self, el, names_list) -> tuple[list, list]:
         """The members of the ports ``names_list`` of ``el``, folded ones resolved, and
         the folded ports met on the way."""
-        members, ports = [], []
+        members: list = []
+        ports: list = []
+        where = self.where
         for names in names_list:
             port = el
             for name in names:
                 port = port._children[name]
-            if id(port) in self.where:
+            if id(port) in where:
                 inner, nested = self.inner_of(port)
-                members.extend(inner)
-                ports.extend(nested)
+                members += inner
+                ports += nested
                 self.joined_outside.add(id(port))
             else:
-                members.append(Member(port, False))
+                members.append(_inside(port))
         return members, ports
 
     def inner_of(self, port) -> tuple[list, list]:
         """The inside members of a folded port's set, nested ports resolved, and the
         folded ports met on the way (itself first)."""
-        got = self.expanded.get(id(port))
+        pid = id(port)
+        got = self.expanded.get(pid)
         if got is None:
-            el, plan, k = self.where[id(port)]
+            el, plan, k = self.where[pid]
             members, nested = self.members_of(el, plan.sets[k][1])
-            got = self.expanded[id(port)] = (members, [port] + nested)
-            self.out.flow[id(port)] = members
+            nested.insert(0, port)
+            got = self.expanded[pid] = (members, nested)
+            self.out.flow[pid] = members
         return got
+
+
+def _inside(port) -> Member:
+    """``Member(port, False)`` for a connector inside a planned subsystem, its path read
+    from the path the flattening walk cached on it."""
+    m = _new_member(Member)
+    m.port, m.outside = port, False
+    m.path = port._path_cache or port.path
+    return m
+
+
+_new_member = Member.__new__
 
 
 #: a member's place in its node: by path, the inside element first
