@@ -1317,6 +1317,16 @@ def _interrupt_within(exc: BaseException) -> KeyboardInterrupt | None:
     return None
 
 
+def _stopped(stop: KeyboardInterrupt) -> int:
+    """The message and exit code of an interrupted command: 143 for SIGTERM, 130 for
+    Ctrl-C (the clean-up has run)."""
+    if isinstance(stop, Terminated):
+        print("error: terminated (SIGTERM); temporary files removed.", file=sys.stderr)
+        return 143
+    print("error: interrupted.", file=sys.stderr)
+    return 130
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``mechatron`` command with ``argv`` (default: ``sys.argv[1:]``).
 
@@ -1333,12 +1343,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     undo_sigterm = _catch_sigterm()
     try:
         return int(args.func(args) or EXIT_OK)
-    except Terminated:
-        print("error: terminated (SIGTERM); temporary files removed.", file=sys.stderr)
-        return 143
-    except KeyboardInterrupt:
-        print("error: interrupted.", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:        # Ctrl-C, or SIGTERM (`Terminated`)
+        return _stopped(exc)
     except BrokenPipeError:  # e.g. `mechatron models | head -1`
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
@@ -1347,12 +1353,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _fail(str(exc), EXIT_USAGE)
     except Exception as exc:  # a bug: still one line, the traceback on request
         stop = _interrupt_within(exc)
-        if isinstance(stop, Terminated):
-            print("error: terminated (SIGTERM); temporary files removed.", file=sys.stderr)
-            return 143
         if stop is not None:
-            print("error: interrupted.", file=sys.stderr)
-            return 130
+            return _stopped(stop)
         return _fail(f"unexpected {type(exc).__name__}: {exc} (a bug in Mechatron; "
                      f"run with MECHATRON_DEBUG=1 for the traceback and report it)",
                      EXIT_FAILURE)

@@ -336,13 +336,9 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
 
 
 def _new_temporary_name(prefix: str) -> str:
-    """A path in the temporary directory that does not exist yet (``prefix`` and 16 random
-    hexadecimal digits); the caller creates it (``os.mkdir``, which refuses a path made
-    meanwhile)."""
-    while True:
-        path = os.path.join(tempfile.gettempdir(), prefix + secrets.token_hex(8))
-        if not os.path.exists(path):
-            return path
+    """A path in the temporary directory: ``prefix`` and 16 random hexadecimal digits.
+    The caller creates it with ``os.mkdir``, which refuses a path that exists."""
+    return os.path.join(tempfile.gettempdir(), prefix + secrets.token_hex(8))
 
 
 def _run_sim(loop, name, rate, loss, realtime, seed, out, steps, cpu, spin,
