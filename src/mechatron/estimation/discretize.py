@@ -779,13 +779,13 @@ class Trajectory:
         tt, yo = self._outputs_sx()
         dy = ca.mtimes(ca.jacobian(yo, x), S) + ca.mtimes(ca.jacobian(yo, p), Dm)
         out = ca.Function("outputs_sens", [tt, xa, p, u0], [yo, ca.vec(dy)])
-        loop = _NativeLoop.build("trajectory_sens", step, out, self._start(D)) \
-            if self.jit else None
+        start = self._start(D)
+        loop = _NativeLoop.build("trajectory_sens", step, out, start) if self.jit else None
         if loop is not None:
             f = self._sens[key] = _Checked(loop, self)
             return f
         S0 = ca.MX.sym("S0", nx, q)
-        args, (Y, dY), _, E = self._casadi_loop("run_sens", step, out, self._start(D), S0)
+        args, (Y, dY), _, E = self._casadi_loop("run_sens", step, out, start, S0)
         f = _Checked(ca.Function("trajectory_sens", args, [Y, dY, E],
                                  ["p", "x0", "U", "S0"], ["Y", "dY", "newton"]), self)
         self._sens[key] = f
