@@ -248,7 +248,7 @@ class _Expansion:
                 ports += nested
                 self.joined_outside.add(id(port))
             else:
-                members.append(_inside(port))
+                members.append(Member(port, False))
         return members, ports
 
     def inner_of(self, port) -> tuple[list, list]:
@@ -263,18 +263,6 @@ class _Expansion:
             got = self.expanded[pid] = (members, nested)
             self.out.flow[pid] = members
         return got
-
-
-def _inside(port) -> Member:
-    """``Member(port, False)`` for a connector inside a planned subsystem, its path read
-    from the path the flattening walk cached on it."""
-    m = _new_member(Member)
-    m.port, m.outside = port, False
-    m.path = port._path_cache or port.path
-    return m
-
-
-_new_member = Member.__new__
 
 
 #: a member's place in its node: by path, the inside element first
