@@ -65,6 +65,23 @@ class AliasResult:
                 for r, o, w in zip(self.residuals, self.origins, self.owners)]
 
 
+@dataclass
+class Replacements:
+    """What takes the place of the eliminated variables: ``old`` -> ``new`` as two
+    columns for one substitution (the eliminated variables, then the derivatives of
+    those that are differentiated); the model's variables in declaration order with
+    each eliminated one replaced (``variables``), from which arguments known by their
+    rows are gathered, not substituted (a substitution walks every symbol of ``old``
+    once per call); and the derivatives' pairs alone (``der_old`` -> ``der_new``, None
+    if none), for arguments that are derivatives."""
+
+    old: ca.SX
+    new: ca.SX
+    variables: ca.SX
+    der_old: ca.SX | None = None
+    der_new: ca.SX | None = None
+
+
 def _signed_symbol(expr: ca.SX, unknowns) -> tuple[str, float] | None:
     sign = 1.0
     while expr.is_op(ca.OP_NEG):
@@ -186,14 +203,14 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     pending = [t for t in flat.__dict__.pop("_pending_templates", ())
                if t.pending is not None]
     result = AliasResult([], origins, owners, [], n_before=n_before)
-    old = new = None
+    replaced = None
     if n:
         # the numbers of the differentiated variables, read by both steps below
         derived = _differentiated(flat, index, n)
         gone = _classes(flat, names, index, parent, factor, const, result, derived)
-        old, new = _replacements(flat, names, index, gone, result, derived) if kept \
-            else (None, None)
-    stacked = _kept_residuals(kept, pending, flat, old, new) if kept else None
+        replaced = _replacements(flat, names, index, gone, result, derived) if kept \
+            else None
+    stacked = _kept_residuals(kept, pending, flat, replaced) if kept else None
     for tpl in pending:     # a residual read now is formed as written, alone
         tpl.pending, tpl.replaced = None, True
     # the union-find is done: the numbering lives on in `result.eliminated` (read with
@@ -376,11 +393,12 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     return gone
 
 
-def _kept_residuals(kept: list, pending: list, flat, old, new) -> ca.SX:
+def _kept_residuals(kept: list, pending: list, flat,
+                    replaced: Replacements | None) -> ca.SX:
     """The residuals of ``kept`` stacked (a class template's rows gathered from its
-    column), with ``old`` replaced by ``new`` (if any): the templates of ``pending``
-    formed on their instances' replaced arguments, each with only the rows some
-    instance keeps, and the other residuals substituted at once."""
+    column), with the eliminated variables replaced (`Replacements`, if any): the
+    templates of ``pending`` formed on their instances' replaced arguments, each with
+    only the rows some instance keeps, and the other residuals substituted at once."""
     waiting = {id(t): t for t in pending}
     rows: dict = {}                  # id(template) -> its rows that are kept
     others = []
@@ -393,14 +411,14 @@ def _kept_residuals(kept: list, pending: list, flat, old, new) -> ca.SX:
     for key, tpl in waiting.items():
         if key in rows:
             keep = sorted(rows[key])
-            tpl.instantiate(flat, old, new, keep)
+            tpl.instantiate(flat, replaced, keep)
             at = [-1] * tpl.n_eq
             for j, k in enumerate(keep):
                 at[k] = j
             place[key] = (tpl.column, tpl.n_eq, len(keep), at)
     rest = stack_residuals(others) if others else None
-    if rest is not None and old is not None:
-        rest = ca.substitute(rest, old, new)
+    if rest is not None and replaced is not None:
+        rest = ca.substitute(rest, replaced.old, replaced.new)
     if not place:                   # no template formed here: every residual is rest
         return rest
     items = []
@@ -432,25 +450,29 @@ def _differentiated(flat, index, n: int) -> list[int]:
     return out
 
 
-def _replacements(flat, names, index, gone, result,
-                  derived) -> tuple[ca.SX | None, ca.SX | None]:
-    """The eliminated variables and their derivatives, and what replaces them, as two
-    columns for one substitution; (None, None) if nothing is replaced."""
+def _replacements(flat, names, index, gone, result, derived) -> Replacements | None:
+    """What replaces the eliminated variables and their derivatives (see
+    `Replacements`); None if nothing is replaced."""
     if not len(gone):
-        return None, None
+        return None
     derivative = flat.context.derivative
     rep, scale = result.representative, result.scale
     column = flat.stack_variables()          # every variable, in declaration order
+    variables = ca.SX(column)
     old, new = [], []
     fixed = rep[gone] < 0
     scaled = gone[~fixed]
     if len(scaled):
-        old.append(column[scaled.tolist()])
+        rows = scaled.tolist()
+        old.append(column[rows])
         new.append(column[rep[scaled].tolist()] * ca.DM(scale[scaled].tolist()))
+        variables[rows] = new[-1]
     if fixed.any():
         constants = gone[fixed]
-        old.append(column[constants.tolist()])
+        rows = constants.tolist()
+        old.append(column[rows])
         new.append(ca.SX(ca.DM(scale[constants].tolist())))
+        variables[rows] = new[-1]
     # derivatives of eliminated variables, in the order of the eliminated
     der_old, der_new = [], []
     if derivative:
@@ -461,10 +483,11 @@ def _replacements(flat, names, index, gone, result,
             r = rep[j]
             der_new.append(ca.SX(0.0) if r < 0 else
                            float(scale[j]) * flat.context.der_symbol(names[r]))
+    ders = (ca.vertcat(*der_old), ca.vertcat(*der_new)) if der_old else (None, None)
     if der_old:
-        old.append(ca.vertcat(*der_old))
-        new.append(ca.vertcat(*der_new))
-    return stack_columns(*old), stack_columns(*new)
+        old.append(ders[0])
+        new.append(ders[1])
+    return Replacements(stack_columns(*old), stack_columns(*new), variables, *ders)
 
 
 def _rank(var, differentiated: bool):

@@ -1794,25 +1794,25 @@ class _Template:
         """The residuals of instance ``instance`` as written, formed alone."""
         return self.fun(ca.vertcat(*self.symbols(self.instances[instance])))
 
-    def instantiate(self, flat: FlatModel, old: ca.SX | None = None,
-                    new: ca.SX | None = None, rows: list | None = None) -> None:
+    def instantiate(self, flat: FlatModel, replaced=None, rows: list | None = None) -> None:
         """Every instance's residuals from one call of the mapped function; with
-        ``old`` and ``new``, on the instances' arguments with ``old`` replaced by
-        ``new`` (alias elimination's replacements), and with ``rows`` (sorted), only
-        those rows of each instance."""
+        ``replaced`` (alias elimination's `mechatron.compiler.alias.Replacements`), on
+        the instances' arguments with the eliminated variables replaced, and with
+        ``rows`` (sorted), only those rows of each instance."""
         self.pending = None
         n = len(self.instances)
         if not n or not self.n_eq:
             return
         width = self.svec.numel()
-        parts = self._columns(flat, n, width)
+        parts = self._columns(flat, n, width, replaced)
         if parts is None:
             flat_args = [a for args in self.instances for a in self.symbols(args)]
             fun, inputs = self.fun, [ca.reshape(ca.vertcat(*flat_args), width, n)]
+            if replaced is not None:
+                inputs = ca.substitute(inputs, [replaced.old], [replaced.new])
         else:
             fun, inputs = self._split(*parts)
-        if old is not None:
-            inputs = ca.substitute(inputs, [old], [new])
+        if replaced is not None:
             self.replaced = True
         if rows is not None and len(rows) < self.n_eq:
             args = fun.sx_in()
@@ -1850,14 +1850,18 @@ class _Template:
         return [a if type(a) is not int else self.par_column[a] if i < k
                 else self.var_column[a] for i, a in enumerate(args)]
 
-    def _columns(self, flat: FlatModel, n: int, width: int):
+    def _columns(self, flat: FlatModel, n: int, width: int, replaced=None):
         """The instances' arguments in blocks of rows, each block one row per slot and
         one column per instance, and the slots the blocks' rows hold, in order (see
         `_split`). The variable slots are taken from the model's stacked variable
         symbols (`FlatModel.stack_variables`) by the rows of each instance's variables,
         recorded as they were bound; the parameters likewise from the column of the
         parameters, the derivatives from theirs; time is one row for all instances.
-        None if the rows are not known (then the caller stacks every argument)."""
+        With ``replaced`` (`mechatron.compiler.alias.Replacements`), the eliminated
+        variables replaced: the variable slots gathered from its column of replaced
+        variables, the derivatives substituted, and, if the parameters' rows are not
+        known, the other arguments substituted. None if the rows of the variables are
+        not known (then the caller stacks every argument)."""
         slots = [i for i in range(len(self.relative)) if self.var_slots[i]]
         if not slots or self.var_rows is None:
             return None
@@ -1867,7 +1871,7 @@ class _Template:
         if (bases[:, which] < 0).any():
             return None
         rows = (bases[:, which] + offset).ravel()
-        column = flat.stack_variables()
+        column = flat.stack_variables() if replaced is None else replaced.variables
         if rows.max() >= column.numel():
             return None
         var_part = ca.reshape(column[rows.tolist()], len(slots), n)
@@ -1887,15 +1891,20 @@ class _Template:
             if ders:
                 bulk = ders == list(range(len(self.relative), width - 1)) and \
                     min(self.der_rows) >= 0
-                parts.append(ca.reshape(
+                part = ca.reshape(
                     self.der_column[self.der_rows] if bulk else ca.vertcat(
                         *[args[i] for args in self.instances for i in ders]),
-                    len(ders), n))
+                    len(ders), n)
+                if replaced is not None and replaced.der_old is not None:
+                    part = ca.substitute(part, replaced.der_old, replaced.der_new)
+                parts.append(part)
             parts.append(flat.context.time)     # the same for every instance
             order = slots + par_slots + ders + [width - 1]
         else:
             every = [self.symbols(args) for args in self.instances]
             rest = ca.vertcat(*[args[i] for args in every for i in others])
+            if replaced is not None:
+                rest = ca.substitute(rest, replaced.old, replaced.new)
             parts = [var_part, ca.reshape(rest, len(others), n)]
             order = slots + others          # the rows of the parts hold these slots
         return parts, order
