@@ -174,9 +174,10 @@ class CompiledModel:
 
     def __getstate__(self):
         state = dict(self.__dict__)
+        unread = state.pop("_serialized", {})
         for key in _FUNCS:
             f = state.get(key)
-            state[key] = f.serialize() if f is not None else None
+            state[key] = f.serialize() if f is not None else unread.get(key)
         state["_cache"] = {}
         return state
 
@@ -186,9 +187,10 @@ class CompiledModel:
             state.setdefault(key, [])
         state.setdefault("f_init", None)
         state.setdefault("f_dist2", None)
-        for key in _FUNCS:
-            if state.get(key) is not None:
-                state[key] = ca.Function.deserialize(state[key])
+        # each function deserialized when first read (`_Deserialized`): a run reads few
+        # of them, and a large model's take most of the time of loading it
+        state["_serialized"] = {key: state.pop(key) for key in _FUNCS
+                                if state.get(key) is not None}
         self.__dict__.update(state)
 
     def _repr_html_(self) -> str:
@@ -200,3 +202,36 @@ class CompiledModel:
         return (f"<CompiledModel '{self.name}': {self.nx} states, {self.nz} algebraic, "
                 f"{len(self.param_names)} parameters, {len(self.names)} logged variables, "
                 f"{self.nr} event relations>")
+
+
+class _Deserialized:
+    """A function of a model read from a file or a pickle (`CompiledModel.__setstate__`),
+    deserialized when first read and then held as an ordinary attribute: a class-level
+    descriptor that the instance's own attribute hides once it is set. Deserializing
+    the functions of a model of 10^4 sections takes most of the time of loading it,
+    and a run reads the right-hand side and the outputs; a model without events, or
+    an algebraic unknown, never needs the other seven."""
+
+    def __init__(self, key: str):
+        self.key = key
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return None                    # the dataclass field's default
+        text = obj.__dict__.get("_serialized", {}).get(self.key)
+        f = None
+        if text is not None:
+            try:
+                f = ca.Function.deserialize(text)
+            except RuntimeError as exc:
+                raise DataError(f"model '{obj.name}': its saved function {self.key} cannot "
+                                "be read (damaged, or written by another CasADi version). "
+                                "Save the model again with CompiledModel.save(path).",
+                                path=obj.name) from exc
+        obj.__dict__[self.key] = f          # set before the text goes: a second thread
+        obj.__dict__.get("_serialized", {}).pop(self.key, None)   # finds the attribute
+        return f
+
+
+for _key in _FUNCS:     # after the dataclass has read the fields' defaults (None)
+    setattr(CompiledModel, _key, _Deserialized(_key))
