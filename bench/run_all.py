@@ -232,6 +232,9 @@ def _rows_ladder_simulate(r: dict) -> list[dict]:
                          f"ratio >= {r['goals']['ratio_lsoda_over_mechatron']:g} (issue 17)",
                          row["goal_ratio_met"]))
         rows.append(_row(f"RC ladder N={n} simulate, first call", "s", m["first_s"]))
+        if "load_and_first_s" in m:
+            rows.append(_row(f"RC ladder N={n} saved model: load and first call", "s",
+                             m["load_and_first_s"]))
         rows.append(_row(f"RC ladder N={n} simulate, peak memory", "MB", m["peak_rss_mb"],
                          "SciPy LSODA process", base["peak_rss_mb"],
                          base["peak_rss_mb"] / m["peak_rss_mb"],

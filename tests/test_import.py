@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 SRC = str(Path(__file__).resolve().parents[1] / "src")
 
 HEAVY = ["matplotlib", "pandas", "pyarrow", "scipy", "pint",
@@ -62,3 +64,33 @@ def test_unknown_attribute_is_an_attribute_error():
                "try:\n    mt.no_such_name\nexcept AttributeError as e:\n"
                "    print(json.dumps(str(e)))")
     assert "no_such_name" in out
+
+
+def test_a_saved_model_loads_and_runs_without_the_compiler_or_pint(tmp_path):
+    """Loading a compiled model and simulating it need neither the compiler's passes nor
+    the unit registry (pint); the compiler is imported by compiling."""
+    path = tmp_path / "rc.mtm"
+    _run(f"""
+import json
+import mechatron as mt
+from mechatron.library import electrical as el
+m = mt.System("rc")
+src, r = m.add("src", el.DCVoltageSource(V=1.0)), m.add("r", el.Resistor(R=1e3))
+c, g = m.add("c", el.Capacitor(C=1e-6)), m.add("g", el.ElectricalReference())
+m.connect(src.p, r.p); m.connect(r.n, c.p); m.connect(src.n, c.n, g.port)
+mt.compile_model(m).save({str(path)!r})
+print(json.dumps(0))
+""")
+    out = _run(f"""
+import json, sys
+import mechatron as mt
+cm = mt.CompiledModel.load({str(path)!r})
+res = mt.simulate(cm, 5e-3)
+print(json.dumps({{"v": float(res["c.v"][-1]), "i": float(res["r.i"][-1]),
+                  "loaded": [m for m in ("pint", "mechatron.compiler.flatten",
+                                         "mechatron.compiler.pipeline") if m in sys.modules]}}))
+""")
+    tau = 1e3 * 1e-6
+    assert abs(out["v"] - (1 - np.exp(-5e-3 / tau))) < 1e-5
+    assert abs(out["i"] - np.exp(-5e-3 / tau) / 1e3) < 1e-8
+    assert out["loaded"] == []

@@ -53,7 +53,7 @@ _LAZY_NAMES = {"compile_model": "mechatron.compiler",
                "trim": "mechatron.analysis",
                "OperatingPoint": "mechatron.analysis",
                "FMUComponent": "mechatron.fmi",
-               "CompiledModel": "mechatron.compiler",
+               "CompiledModel": "mechatron.compiler.compiled",
                "simulate": "mechatron.solvers",
                "SimResult": "mechatron.results",
                "SolverStats": "mechatron.results"}

@@ -20,6 +20,12 @@ from mechatron.units import to_si
 
 __all__ = ["CompiledModel"]
 
+#: Marks that the event functions add to a relation's event counter in ``X`` (read by
+#: the solvers after a run): a relation that chattered, an event iteration that did not
+#: converge (see `mechatron.compiler.events`).
+CHATTER_FLAG = 1e15
+LOOP_FLAG = 2e15
+
 _FUNCS = ("f_ode", "f_alg", "f_out", "f_zero", "f_dist", "f_transition", "f_scales",
           "f_events", "f_init", "f_dist2")
 

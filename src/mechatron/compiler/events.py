@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
+from mechatron.compiler.compiled import CHATTER_FLAG, LOOP_FLAG
 from mechatron.compiler.flatten import _TemplateEquation
 from mechatron.compiler.relations import Relation, _rebuild
 from mechatron.core.events import MAX_ROUNDS, Clock, Reinit, SampleCondition
@@ -53,8 +54,6 @@ from mechatron.errors import StructuralError
 __all__ = ["EventPlan", "prepare_events", "CHATTER_FLAG", "CHATTER_TIME", "LOOP_FLAG",
            "ORDINARY"]
 
-CHATTER_FLAG = 1e15      # added to an event counter to mark chattering
-LOOP_FLAG = 2e15         # added to an event counter: event iteration did not converge
 CHATTER_TIME = 1e-9      # s: a relation crossed again within this time is chattering
 DUE_TOL = 1e-9           # a tick is due when t >= t_next - DUE_TOL * period
 CHAIN = 10               # rounds per conditional chain (MAX_ROUNDS = CHAIN * CHAIN)

@@ -214,7 +214,7 @@ def _conflicts(g, w, wv, names) -> list[str]:
 
 def _check_loop(cm: CompiledModel, X: np.ndarray, where: str) -> None:
     """Raise if the event iteration found no fixed point (see compiler.events)."""
-    from mechatron.compiler.events import LOOP_FLAG
+    from mechatron.compiler.compiled import LOOP_FLAG
     nx, nr = cm.nx, cm.nr
     bad = [k for k in range(nr) if X[nx + nr + k] >= 0.75 * LOOP_FLAG]
     if bad:

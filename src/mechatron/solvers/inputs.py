@@ -44,15 +44,16 @@ from __future__ import annotations
 
 import difflib
 import numbers
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-import pint
 
+from mechatron import units
 from mechatron.errors import SimulationError, UnitError
-from mechatron.units import to_si, ureg
+from mechatron.units import to_si
 
 __all__ = ["SAMPLES", "InputSignal", "Inputs", "resolve_inputs", "driven_parameters"]
 
@@ -234,10 +235,17 @@ def resolve_inputs(cm, inputs, params, t0: float, t_stop: float) -> Inputs | Non
     return Inputs(signals, t0, t_stop)
 
 
+def _is_quantity(value) -> bool:
+    """Whether ``value`` is a pint quantity. Only a program that imported pint holds one:
+    a run that is given none does not import it (a few tenths of a second)."""
+    pint = sys.modules.get("pint")
+    return pint is not None and isinstance(value, pint.Quantity)
+
+
 def _signal(cm, name: str, slot: int, unit: str, value, t0: float,
             t_stop: float) -> InputSignal:
     where = f"input '{name}'"
-    if isinstance(value, (numbers.Real, str, pint.Quantity)) and np.ndim(
+    if (isinstance(value, (numbers.Real, str)) or _is_quantity(value)) and np.ndim(
             getattr(value, "magnitude", value)) == 0:
         x = to_si(value, unit, where)
         if not np.isfinite(x):
@@ -260,8 +268,8 @@ def _signal(cm, name: str, slot: int, unit: str, value, t0: float,
 
 def _array(data, unit: str, where: str) -> np.ndarray:
     """A 1-D float array in SI from numbers or a pint quantity array."""
-    if isinstance(data, pint.Quantity):
-        target = ureg.Unit(unit or "dimensionless")
+    if _is_quantity(data):
+        target = units.ureg.Unit(unit or "dimensionless")
         if data.dimensionality != target.dimensionality:
             raise UnitError(f"{where}: expected values in {unit or 'dimensionless'}, got "
                             f"{data.units:~} ({data.dimensionality}). Convert them, or "
@@ -314,7 +322,7 @@ def _call(sig: InputSignal, times: np.ndarray) -> np.ndarray:
                               path=sig.name) from exc
     if isinstance(out, str):
         out = to_si(out, sig.unit, where)
-    arr = np.ravel(_array(np.atleast_1d(out) if not isinstance(out, pint.Quantity)
+    arr = np.ravel(_array(np.atleast_1d(out) if not _is_quantity(out)
                           else np.atleast_1d(out.magnitude) * out.units,
                           sig.unit, f"{where}: function values"))
     if arr.size == 1:   # a function returning a constant

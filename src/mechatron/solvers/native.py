@@ -39,7 +39,7 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
-from mechatron.compiler.events import CHATTER_FLAG
+from mechatron.compiler.compiled import CHATTER_FLAG
 from mechatron.errors import SimulationError
 
 __all__ = ["integrate_native", "native_library", "auto_library", "build_library",

@@ -9,7 +9,6 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
-from mechatron.compiler.pipeline import compile_model
 from mechatron.core.component import Component
 from mechatron.errors import RunTooLargeError, SimulationError
 from mechatron.results import SimResult, SolverStats
@@ -139,6 +138,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                               f"instance paths, got {log!r}.")
     compile_time = None
     if isinstance(model, Component):
+        from mechatron.compiler.pipeline import compile_model
         t_c = _time.perf_counter()
         cm = compile_model(model)
         compile_time = _time.perf_counter() - t_c
@@ -448,7 +448,7 @@ def _check_chattering(cm: CompiledModel, Xf: np.ndarray, solver: str) -> None:
     """Raise if the transition marked a relation as chattering (see
     :mod:`mechatron.compiler.events`): after its event it was driven straight back onto
     its switching surface, so it would switch again at once, endlessly."""
-    from mechatron.compiler.events import CHATTER_FLAG, LOOP_FLAG
+    from mechatron.compiler.compiled import CHATTER_FLAG, LOOP_FLAG
     nx, nr = cm.nx, cm.nr
     looping = [k for k in range(nr) if Xf[nx + nr + k] >= 0.75 * LOOP_FLAG]
     if looping:
