@@ -3,9 +3,10 @@
 Equations of the form ``a = b``, ``a = -b`` and ``a = c`` (a numeric constant) are removed
 and their variables replaced by one representative (or the constant) in every remaining
 equation: a class template's instances take their variable arguments from one column of
-the replaced variables (`Replacements`), the other equations one bulk substitution. Connections produce most aliases; component
-equations such as ``i == p.i`` produce the rest. The eliminated variables stay in the
-simulation log, computed from their representative.
+the replaced variables (`Replacements`), the other equations one bulk substitution.
+Connections produce most aliases; component equations such as ``i == p.i`` produce the
+rest. The eliminated variables stay in the simulation log, computed from their
+representative.
 
 Speed: the variables are numbered in declaration order; the union-find runs on integer
 lists, and the classes, their representatives and the factors of their members are
