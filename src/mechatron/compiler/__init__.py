@@ -5,6 +5,10 @@ needs `CompiledModel` alone, not the passes (nor the unit registry they build)."
 
 from mechatron.compiler.compiled import CompiledModel
 
+TYPE_CHECKING = False       # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:           # for type checkers and the API reference
+    from mechatron.compiler.pipeline import compile_model
+
 __all__ = ["compile_model", "CompiledModel"]
 
 
