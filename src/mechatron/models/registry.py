@@ -22,6 +22,27 @@ BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum"
                    "two_clutch_gearbox", "battery_bldc",
                    "induction_dol")
 
+#: The module that registers each built-in entry, so that `get` imports that module
+#: alone (importing every model imports the whole library and SciPy's optimizers: about
+#: a second); a name not here loads them all. ``tests/models/test_registry.py`` checks it
+#: against the registrations.
+_MODULE_OF = {"dc_motor": "dc_motor", "msd_horizontal": "msd", "msd_incline": "msd",
+              "msd_vertical": "msd", "double_pendulum": "double_pendulum",
+              "pmsm_foc": "pmsm", "cart_pendulum": "cart_pendulum",
+              "motor_heating": "motor_heating", "quarter_car": "quarter_car",
+              "ball_screw_axis": "ball_screw", "kinetic_mechanism": "kinetic_mechanism",
+              "dc_motor_pwm": "dc_motor_pwm", "solenoid": "solenoid",
+              "hydraulic_cylinder": "hydraulic_cylinder",
+              "buck_converter": "buck_converter", "hbridge_rc_filter": "hbridge_filter",
+              "stepper_motor": "stepper", "bldc_motor": "bldc",
+              "servo_encoder": "servo_encoder", "geared_drive": "geared_drive",
+              "two_axis": "two_axis", "dc_motor_position_pi": "dc_motor_control",
+              "dc_motor_speed_pi": "dc_motor_control", "emps": "emps",
+              "planetary_hoist": "planetary_hoist",
+              "saturating_solenoid": "saturating_solenoid",
+              "two_clutch_gearbox": "two_clutch_gearbox", "battery_bldc": "battery_bldc",
+              "induction_dol": "induction_dol"}
+
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
 
@@ -58,7 +79,11 @@ def list() -> builtins.list[ModelEntry]:  # noqa: A001  (public name, documented
 
 def get(name: str) -> ModelEntry:
     """The entry called ``name``."""
-    _load()
+    if name not in _REGISTRY and name in _MODULE_OF and not _loaded:
+        from importlib import import_module
+        import_module(f"mechatron.models.{_MODULE_OF[name]}")
+    if name not in _REGISTRY:
+        _load()
     if name not in _REGISTRY:
         close = difflib.get_close_matches(name, _REGISTRY, 3)
         raise ModelError(f"no model '{name}' in the database"
