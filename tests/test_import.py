@@ -94,3 +94,15 @@ print(json.dumps({{"v": float(res["c.v"][-1]), "i": float(res["r.i"][-1]),
     assert abs(out["v"] - (1 - np.exp(-5e-3 / tau))) < 1e-5
     assert abs(out["i"] - np.exp(-5e-3 / tau) / 1e3) < 1e-8
     assert out["loaded"] == []
+
+
+def test_the_command_line_parser_imports_no_compiler_pass():
+    """Every command's parser is built on each call of ``mechatron``: building it must
+    not import the compiler's passes (a few tenths of a second before any work)."""
+    loaded = _run("import json, sys\n"
+                  "from mechatron.cli import build_parser\n"
+                  "build_parser()\n"
+                  "print(json.dumps([m for m in ('mechatron.compiler.flatten', "
+                  "'mechatron.compiler.pipeline', 'mechatron.report.diagram') "
+                  "if m in sys.modules]))")
+    assert loaded == []

@@ -25,7 +25,6 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
-from mechatron.compiler.pipeline import compile_model
 from mechatron.core.component import Component
 from mechatron.errors import SimulationError
 from mechatron.solvers.initial import initialize
@@ -54,6 +53,7 @@ def _compiled(model) -> CompiledModel:
     if isinstance(model, CompiledModel):
         return model
     if isinstance(model, Component):
+        from mechatron.compiler.pipeline import compile_model
         return compile_model(model)
     raise TypeError(f"expected a Component or CompiledModel, got {model!r}.")
 

@@ -18,7 +18,6 @@ from itertools import repeat
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.flatten import Origins
 
 try:      # CasADi's own entry point, without the Python wrapper: once per instruction
     from casadi._casadi import Function_instruction_id as _OP_OF
@@ -118,6 +117,8 @@ def _candidates(origins) -> list[int] | None:
                                                                range(m)))
         return none
 
+    # imported here: estimation reads this module without the compiler's passes
+    from mechatron.compiler.flatten import Origins
     if isinstance(origins, Origins) and origins.formed is None:
         # the rows of the templates that may hold one, and every row held as given
         # (read one by one, as below), in order
