@@ -234,8 +234,10 @@ class _Deserialized:
                                 "be read (damaged, or written by another CasADi version). "
                                 "Save the model again with CompiledModel.save(path).",
                                 path=obj.name) from exc
-        obj.__dict__[self.key] = f          # set before the text goes: a second thread
-        obj.__dict__.get("_serialized", {}).pop(self.key, None)   # finds the attribute
+        # the attribute set before the text is dropped: a thread reading the function at
+        # the same time finds one or the other
+        obj.__dict__[self.key] = f
+        obj.__dict__.get("_serialized", {}).pop(self.key, None)
         return f
 
 
