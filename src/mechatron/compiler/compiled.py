@@ -215,8 +215,8 @@ class _Deserialized:
     deserialized when first read and then held as an ordinary attribute: a class-level
     descriptor that the instance's own attribute hides once it is set. Deserializing
     the functions of a model of 10^4 sections takes most of the time of loading it,
-    and a run reads the right-hand side and the outputs; a model without events, or
-    an algebraic unknown, never needs the other seven."""
+    and a run reads the right-hand side, the outputs and the time scales; a model
+    without events, algebraic unknowns or initial equations needs none of the others."""
 
     def __init__(self, key: str):
         self.key = key
