@@ -60,9 +60,10 @@ CONTROLLER_T0 = -1.0
 
 
 def build_controller(experiment, dt: float, *, lines: int, V_s: float) -> mt.System:
-    """The controller of ``experiment`` (a :class:`~mechatron.realtime.loop.Experiment`)
-    sampled every ``dt`` s, for an encoder of ``lines`` lines (x4 quadrature) and an
-    H-bridge supply ``V_s``; see the module docstring for the diagram."""
+    """The controller of ``experiment`` (an
+    :class:`~mechatron.realtime.experiments.Experiment`) sampled every ``dt`` s, for an
+    encoder of ``lines`` lines (x4 quadrature) and an H-bridge supply ``V_s``; see the
+    module docstring for the diagram."""
     exp = experiment
     M = max(2, int(round(exp.window_s / dt)))
     cpr = 4 * int(lines)

@@ -6,7 +6,7 @@ import argparse
 import sys
 import warnings
 
-from mechatron.realtime.loop import EXPERIMENTS
+from mechatron.realtime.experiments import EXPERIMENTS
 
 __all__ = ["add_hil_command", "cmd_hil", "EXIT_OVER_BUDGET"]
 
