@@ -38,8 +38,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.compiled import CompiledModel
-from mechatron.compiler.compiled import CHATTER_FLAG
+from mechatron.compiler.compiled import CHATTER_FLAG, CompiledModel
 from mechatron.errors import SimulationError
 
 __all__ = ["integrate_native", "native_library", "auto_library", "build_library",

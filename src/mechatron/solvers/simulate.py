@@ -348,12 +348,6 @@ class _Descriptions(Mapping):
     def __len__(self) -> int:
         return len(self._formed())
 
-    def __contains__(self, name) -> bool:
-        return name in self._formed()
-
-    def get(self, name, default=None):
-        return self._formed().get(name, default)
-
 
 def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int]]:
     """The logged variables that are states: their rows in ``cm.names`` and their indices
