@@ -40,19 +40,35 @@ machine is busy, and the growth is read on the *minima*: the fastest N = 1000 co
 and the fastest N = 100000 compile, both nearest to a calm machine. Means and medians
 are printed beside it, with every run and its passes.
 
+Compile work counted, not timed (``--counted``): the instructions and the data-cache
+misses of compiling the RC ladder at N = 1000 and N = 10000, per flat equation, counted by
+valgrind's cachegrind on a fixed simulated cache (32 KiB first level, 32 MiB last level,
+as on the machine the goals were set on), so the same on any machine and under any load.
+Each count is a compile's process less a process that builds the same ladder and stops
+there. The instructions per equation show whether the work per equation grows; the
+last-level misses per equation show what the time measures can only suggest, how much
+more of the compile runs out of memory at the larger size. Cachegrind models no
+prefetcher: a sequential scan counts as misses that a real processor mostly hides. Needs
+valgrind (``apt-get install valgrind``); about 10 minutes.
+
 ``--quick`` skips N = 10000. Run: ``python bench/bench_scaling.py [--quick] [--large]``,
-``python bench/bench_scaling.py --growth [ROUNDS]``.
+``python bench/bench_scaling.py --growth [ROUNDS]``, ``python bench/bench_scaling.py
+--counted``.
 """
 
 from __future__ import annotations
 
 import gc
 import json
+import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import _common  # noqa: F401  (import path)
 from _common import (clock, growth_exponent, log, logging_alternative, main, peak_rss_mb,
@@ -321,6 +337,139 @@ def run_growth(quick: bool = False, rounds: int = 4) -> dict:
             "compile_growth": compile_growth(rounds=1 if quick else rounds)}
 
 
+#: the simulated caches of ``--counted`` (size, associativity, line: valgrind's syntax)
+COUNTED_CACHES = {"I1": "32768,8,64", "D1": "32768,8,64", "LL": "33554432,16,64"}
+#: cachegrind's events, read from its output file, and what ``--counted`` reports
+COUNTED_EVENTS = {"Ir": "instructions", "D1mr": "first_level_read_misses",
+                  "DLmr": "last_level_read_misses", "DLmw": "last_level_write_misses"}
+
+
+#: where a ``--counted --passes`` process stops: after building the ladder, after each of
+#: these passes of `mechatron.compiler.pipeline` (the name it calls), or at the end
+COUNTED_STOPS = {"flatten": "flatten", "dimensions": "_check_dimensions",
+                 "alias": "eliminate_aliases", "structure": "lower"}
+
+
+def counted_one(n: int, stop: str) -> None:
+    """What ``--counted`` runs under cachegrind: build the RC ladder of ``n`` sections
+    (after a ladder of 2 compiled, as in `compile_once`); unless ``stop`` is "build",
+    compile it, to the end ("compile") or until the pass ``stop`` of `COUNTED_STOPS`
+    returns; print the flat equations; leave without tearing down (freeing the model at
+    exit is neither side's work)."""
+    from mechatron.compiler import pipeline
+
+    mt.compile_model(rc_ladder(2))
+    model = rc_ladder(n)
+    gc.collect()
+
+    def leave(flat: int = 0) -> None:
+        print(json.dumps({"N": n, "stop": stop, "equations_flat": flat}), flush=True)
+        os._exit(0)
+
+    if stop in COUNTED_STOPS:
+        name = COUNTED_STOPS[stop]
+        original = getattr(pipeline, name)
+
+        def then_leave(*args, **kwargs):
+            original(*args, **kwargs)
+            leave()
+        setattr(pipeline, name, then_leave)
+    leave(mt.compile_model(model).report["equations"]["flat"] if stop != "build" else 0)
+
+
+def cachegrind_totals(path: str | os.PathLike) -> dict[str, int]:
+    """The totals of a cachegrind output file by event name (its ``events:`` line and
+    its ``summary:`` or ``totals:`` line)."""
+    events = totals = None
+    with open(path) as text:
+        for line in text:
+            if line.startswith("events:"):
+                events = line.split()[1:]
+            elif line.startswith(("summary:", "totals:")):
+                totals = [int(v) for v in line.split()[1:]]
+    if events is None or totals is None or len(events) != len(totals):
+        raise ValueError(f"{path}: not a complete cachegrind output file (no events or "
+                         "totals line)")
+    return dict(zip(events, totals))
+
+
+def _cachegrind(n: int, stop: str, folder: str) -> tuple[dict, dict]:
+    """One `counted_one` process under cachegrind: (its JSON line, its totals)."""
+    out = os.path.join(folder, f"cg.{n}.{stop}")
+    cmd = ["valgrind", "--tool=cachegrind", "--cache-sim=yes",
+           *[f"--{k}={v}" for k, v in COUNTED_CACHES.items()],
+           f"--cachegrind-out-file={out}", sys.executable, __file__,
+           "--counted-one", str(n), stop]
+    # string hashing seeded alike in every process: the same dictionary layouts
+    env = {**os.environ, "PYTHONHASHSEED": "0"}
+    done = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    if done.returncode != 0:
+        tail = "\n".join(done.stderr.strip().splitlines()[-5:])
+        raise RuntimeError(f"cachegrind run of N={n} ({stop}) failed "
+                           f"({done.returncode}):\n{tail}")
+    return json.loads(done.stdout.strip().splitlines()[-1]), cachegrind_totals(out)
+
+
+def compile_counted(sizes: tuple[int, ...] = (1000, 10000), passes: bool = False,
+                    runner=None) -> dict:
+    """Instructions and cache misses of compiling the RC ladder, per flat equation, at
+    each of ``sizes``, and their growth from the first size to each other (see the
+    module's docstring); with ``passes``, also of each pass (`COUNTED_STOPS`, then
+    the rest of the compile): the differences of processes stopped after each.
+    ``runner(n, stop, folder)`` replaces the cachegrind run (tests)."""
+    if runner is None:
+        if shutil.which("valgrind") is None:
+            log("counted compile work: valgrind is not installed (apt-get install "
+                "valgrind); skipped")
+            return {"skipped": "valgrind is not installed"}
+        runner = _cachegrind
+    stops = ["build", *(COUNTED_STOPS if passes else ()), "compile"]
+    jobs = [(n, stop) for n in sizes for stop in stops]
+    with tempfile.TemporaryDirectory() as folder, \
+            ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        done = dict(zip(jobs, pool.map(lambda job: runner(*job, folder), jobs)))
+
+    def per_equation(after: dict, before: dict, flat: int) -> dict:
+        return {f"{key}_per_equation": (after[event] - before[event]) / flat
+                for event, key in COUNTED_EVENTS.items()}
+
+    rows = []
+    for n in sizes:
+        flat = done[(n, "compile")][0]["equations_flat"]
+        row = {"N": n, "equations_flat": flat,
+               **per_equation(done[(n, "compile")][1], done[(n, "build")][1], flat)}
+        if passes:      # each pass: its stop less the one before
+            row["passes"] = {
+                ("rest" if stop == "compile" else stop):
+                per_equation(done[(n, stop)][1], done[(n, earlier)][1], flat)
+                for earlier, stop in zip(stops, stops[1:])}
+        rows.append(row)
+        log(f"rc_ladder N={n} compile, counted: "
+            f"{row['instructions_per_equation'] / 1e3:.1f}k instructions, "
+            f"{row['first_level_read_misses_per_equation']:.0f} first-level read misses, "
+            f"{row['last_level_read_misses_per_equation']:.1f} + "
+            f"{row['last_level_write_misses_per_equation']:.1f} last-level read + write "
+            "misses per equation")
+        for name, part in row.get("passes", {}).items():
+            log(f"  {name}: {part['instructions_per_equation'] / 1e3:.1f}k instructions, "
+                f"{part['last_level_read_misses_per_equation']:.1f} + "
+                f"{part['last_level_write_misses_per_equation']:.1f} last-level misses")
+    first = rows[0]
+    for row in rows[1:]:
+        row["growth_from_N"] = first["N"]
+        for key in COUNTED_EVENTS.values():
+            k = f"{key}_per_equation"
+            row[f"{key}_growth"] = row[k] / first[k] if first[k] > 0 else None
+    return {"caches": COUNTED_CACHES, "rows": rows}
+
+
+def run_counted(quick: bool = False, passes: bool = False) -> dict:
+    """Compile work per equation counted by cachegrind, N = 1000 and 10000 (issue 17)."""
+    return {"benchmark": "scaling_counted",
+            "compile_counted": compile_counted((1000,) if quick else (1000, 10000),
+                                               passes=passes)}
+
+
 def _exponents(rows: list[dict], key, same_grid: bool = False) -> list[dict]:
     """Growth exponents between successive rows; with ``same_grid``, only between rows
     that logged the same number of output points (None otherwise)."""
@@ -427,6 +576,19 @@ def run_large(quick: bool = False) -> dict:
 if __name__ == "__main__":
     if "--compile-one" in sys.argv:      # one size in this process (compile_scaling)
         print(json.dumps(compile_once(int(sys.argv[sys.argv.index("--compile-one") + 1]))))
+    elif "--counted-one" in sys.argv:    # one process of compile_counted
+        at = sys.argv.index("--counted-one")
+        counted_one(int(sys.argv[at + 1]), sys.argv[at + 2])
+    elif "--counted" in sys.argv:
+        sys.argv.remove("--counted")
+        by_pass = "--passes" in sys.argv
+        if by_pass:
+            sys.argv.remove("--passes")
+
+        def counted(quick: bool = False) -> dict:
+            """Compile work per equation counted by cachegrind (issue 17)."""
+            return run_counted(quick, by_pass)
+        main(counted)
     elif "--growth" in sys.argv:
         at = sys.argv.index("--growth")
         rounds = int(sys.argv.pop(at + 1)) if sys.argv[at + 1:at + 2] and \

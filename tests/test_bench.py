@@ -146,3 +146,47 @@ def test_machine_spells_counts_its_loops(bench_scaling):
     got = bench_scaling.machine_spells(seconds=0.2)
     assert got["loops"] > 0 and got["fastest_ms"] > 0
     assert 0.0 <= got["slow_share"] <= 1.0 and got["slowest_over_fastest"] >= 1.0
+
+
+def test_cachegrind_totals_reads_events_and_summary(bench_scaling, tmp_path):
+    out = tmp_path / "cachegrind.out"
+    out.write_text("desc: LL cache: 33554432 B, 64 B, 16-way associative\n"
+                   "cmd: python x.py\nevents: Ir D1mr DLmr DLmw\nfl=x.c\nfn=f\n1 5 1 0 0\n"
+                   "summary: 700 30 4 2\n")
+    assert bench_scaling.cachegrind_totals(out) == {"Ir": 700, "D1mr": 30, "DLmr": 4,
+                                                    "DLmw": 2}
+    out.write_text("events: Ir D1mr\n")
+    with pytest.raises(ValueError, match="not a complete cachegrind output"):
+        bench_scaling.cachegrind_totals(out)
+
+
+def test_compile_counted_subtracts_the_build_and_divides_by_equations(bench_scaling):
+    """``bench_scaling.py --counted [--passes]``: each size's compile process less its
+    build-only process, per flat equation, each pass as the process stopped after it
+    less the one stopped before, and the growth from the first size (a runner standing
+    in for cachegrind, whose runs take minutes)."""
+    stops = ["build", *bench_scaling.COUNTED_STOPS, "compile"]
+
+    def runner(n, stop, folder):
+        # each pass does k * n^2 instructions, 1 + k last-level misses per n^2 / 10
+        k = stops.index(stop)
+        totals = {"Ir": 1000 * n + 10 * k * (k + 1) // 2 * n ** 2, "D1mr": 10 * n,
+                  "DLmr": n + k * n ** 2 // 10, "DLmw": n * min(k, 1)}
+        return {"N": n, "stop": stop, "equations_flat": 12 * n if stop == "compile"
+                else 0}, totals
+
+    out = bench_scaling.compile_counted((10, 100), passes=True, runner=runner)
+    small, large = out["rows"]
+    whole = 10 * 15 * 10 ** 2       # the five passes of 10 k n^2, k = 1..5
+    assert small["instructions_per_equation"] == pytest.approx(whole / 120)
+    assert large["last_level_read_misses_per_equation"] == pytest.approx(5 * 1000 / 1200)
+    assert large["instructions_growth"] == pytest.approx(10.0)
+    assert large["last_level_write_misses_growth"] == pytest.approx(1.0)
+    assert list(small["passes"]) == [*bench_scaling.COUNTED_STOPS, "rest"]
+    assert [p["instructions_per_equation"] for p in small["passes"].values()] == \
+        pytest.approx([10 * k * 100 / 120 for k in range(1, 6)])
+    assert sum(p["instructions_per_equation"] for p in large["passes"].values()) == \
+        pytest.approx(large["instructions_per_equation"])
+    only_whole = bench_scaling.compile_counted((10,), runner=runner)["rows"][0]
+    assert "passes" not in only_whole and \
+        only_whole["instructions_per_equation"] == small["instructions_per_equation"]
