@@ -53,7 +53,7 @@ valgrind (``apt-get install valgrind``); about 10 minutes.
 
 ``--quick`` skips N = 10000. Run: ``python bench/bench_scaling.py [--quick] [--large]``,
 ``python bench/bench_scaling.py --growth [ROUNDS]``, ``python bench/bench_scaling.py
---counted``.
+--counted [--passes]`` (``--passes``: each pass counted apart, about 35 minutes).
 """
 
 from __future__ import annotations
@@ -358,6 +358,9 @@ def counted_one(n: int, stop: str) -> None:
     exit is neither side's work)."""
     from mechatron.compiler import pipeline
 
+    if stop not in ("build", "compile", *COUNTED_STOPS):
+        raise ValueError(f"--counted-one: unknown stop {stop!r}; one of build, compile, "
+                         + ", ".join(COUNTED_STOPS))
     mt.compile_model(rc_ladder(2))
     model = rc_ladder(n)
     gc.collect()
