@@ -1,20 +1,7 @@
 """The registry of database entries: `get` imports the module of the entry it is asked
 for, not the whole database."""
 
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
-
-SRC = str(Path(__file__).resolve().parents[2] / "src")
-
-
-def _run(code: str):
-    env = dict(os.environ, PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
-                         text=True, check=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])
+from tests.test_import import _run     # code run in a fresh interpreter, its JSON back
 
 
 def test_the_index_names_the_module_that_registers_each_built_in_entry():
