@@ -12,20 +12,10 @@ from mechatron.models.entry import ModelEntry
 
 __all__ = ["register", "get", "list"]
 
-#: Modules of the package that register entries when imported.
-BUILTIN_MODULES = ("dc_motor", "msd", "double_pendulum", "pmsm", "cart_pendulum",
-                   "motor_heating", "quarter_car", "ball_screw", "kinetic_mechanism", "dc_motor_pwm",
-                   "solenoid", "hydraulic_cylinder",
-                   "buck_converter", "hbridge_filter", "stepper",
-                   "bldc", "servo_encoder", "geared_drive", "two_axis", "dc_motor_control", "emps",
-                   "planetary_hoist", "saturating_solenoid",
-                   "two_clutch_gearbox", "battery_bldc",
-                   "induction_dol")
-
-#: The module that registers each built-in entry, so that `get` imports that module
-#: alone (importing every model imports the whole library and SciPy's optimizers: about
-#: a second); a name not here loads them all. ``tests/models/test_registry.py`` checks it
-#: against the registrations.
+#: The module that registers each built-in entry (in loading order), so that `get`
+#: imports that module alone (importing every model imports the whole library and
+#: SciPy's optimizers: about a second); a name not here loads them all.
+#: ``tests/models/test_registry.py`` checks it against the registrations.
 _MODULE_OF = {"dc_motor": "dc_motor", "msd_horizontal": "msd", "msd_incline": "msd",
               "msd_vertical": "msd", "double_pendulum": "double_pendulum",
               "pmsm_foc": "pmsm", "cart_pendulum": "cart_pendulum",
@@ -42,6 +32,9 @@ _MODULE_OF = {"dc_motor": "dc_motor", "msd_horizontal": "msd", "msd_incline": "m
               "saturating_solenoid": "saturating_solenoid",
               "two_clutch_gearbox": "two_clutch_gearbox", "battery_bldc": "battery_bldc",
               "induction_dol": "induction_dol"}
+
+#: Modules of the package that register entries when imported, in the order they load.
+BUILTIN_MODULES = tuple(dict.fromkeys(_MODULE_OF.values()))
 
 _REGISTRY: dict[str, ModelEntry] = {}
 _loaded = False
