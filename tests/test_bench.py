@@ -9,6 +9,7 @@ import inspect
 import json
 import math
 import shutil
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -133,6 +134,8 @@ def test_compile_growth_reads_what_its_fresh_processes_write(bench_scaling, monk
     sizes' means, medians and minima (what is printed is computed from what ran)."""
     monkeypatch.setattr(bench_scaling, "machine_spells",
                         lambda seconds=10.0: {"slow_share": 0.0})
+    monkeypatch.setattr(bench_scaling, "fresh_page_cost",
+                        lambda mb=256: {"us_per_page": 1.0})
     out = bench_scaling.compile_growth(rounds=1, small=5, large=10, per_round=2)
     small, large = out["sizes"]["5"], out["sizes"]["10"]
     assert len(small["us_per_equation"]) == 2 and len(large["us_per_equation"]) == 1
@@ -140,6 +143,21 @@ def test_compile_growth_reads_what_its_fresh_processes_write(bench_scaling, monk
         assert out["growth"][stat] == pytest.approx(large[stat] / small[stat])
     assert out["met"] == (out["growth"]["min"] < out["goal"])
     assert set(large["passes_us_per_equation"][0]) >= {"flatten", "structure", "total"}
+    # user and kernel time apart: user alone grows as the ratio of the user times
+    for stat, f in (("min", min), ("median", statistics.median)):
+        assert out["growth_user"][stat] == pytest.approx(
+            f(large["user_us_per_equation"]) / f(small["user_us_per_equation"]))
+    for size in (small, large):
+        assert len(size["system_us_per_equation"]) == len(size["us_per_equation"])
+        assert all(f > 0 for f in size["page_faults_per_equation"])
+
+
+def test_fresh_page_cost_touches_every_page(bench_scaling):
+    got = bench_scaling.fresh_page_cost(mb=8)
+    # one fault per 4 KiB page of a fresh mapping (fewer only with huge pages, which
+    # the kernel gives an anonymous mapping only on request)
+    assert got["page_faults"] >= 0.9 * 8 * 256
+    assert got["us_per_page"] > 0 and got["system_us_per_page"] >= 0
 
 
 def test_machine_spells_counts_its_loops(bench_scaling):
