@@ -672,10 +672,13 @@ class SimResult:
     def _of_model(cls, t: np.ndarray, values: np.ndarray, names: list[str],
                   units: list[str], index: dict[str, int], descriptions: dict[str, str],
                   *, stats: SolverStats | None, model_name: str,
-                  stored: Sequence[int] | None = None, source: Any = None) -> SimResult:
+                  stored: Sequence[int] | None = None, source: Any = None,
+                  stored_at: dict[int, int] | None = None) -> SimResult:
         """A log from a compiled model's run, without the checks of the constructor:
         the names, units and index come from the compiled model (unique, checked when it
-        was compiled) and are shared, not copied, between its results."""
+        was compiled) and are shared, not copied, between its results; so is
+        ``stored_at``, the place of each stored row (``{row: k}`` of ``stored``, which a
+        log only reads), when given."""
         self = cls.__new__(cls)
         self.model_name = str(model_name)
         self.initialization = []
@@ -687,7 +690,8 @@ class SimResult:
         self._names, self._units, self._index = names, units, index
         self._descriptions = descriptions
         self._source = source if stored is not None else None
-        self._pos = None if stored is None else {int(r): k for k, r in enumerate(stored)}
+        self._pos = None if stored is None else stored_at if stored_at is not None \
+            else {int(r): k for k, r in enumerate(stored)}
         self._computed = {}
         self.stats = stats
         return self

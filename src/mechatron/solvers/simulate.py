@@ -254,9 +254,12 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     if lazy:
         rows, states = _state_rows(cm)
         values = X[:cm.nx] if states == list(range(cm.nx)) else X[states]
+        stored_at = cm._cache.get("state_rows_at")
+        if stored_at is None:       # the same for every run: formed once (1000s of rows)
+            stored_at = cm._cache["state_rows_at"] = {r: k for k, r in enumerate(rows)}
         res = SimResult._of_model(t, values, names, units, index, descriptions,
                                   stats=stats, model_name=cm.name, stored=rows,
-                                  source=source)
+                                  source=source, stored_at=stored_at)
         res._keep(asked)
     else:
         if not np.all(np.isfinite(Y[:, -1])):

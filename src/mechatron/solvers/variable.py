@@ -133,10 +133,15 @@ def _tridiagonal_form(cm: CompiledModel) -> LinearForm | None:
     """The model's `LinearForm` when its pattern with the diagonal added is the full
     tridiagonal band (what CasADi's ``tridiag`` plug-in indexes), else None; decided once
     per model."""
-    form = linear_form(cm)
-    if form is None or form.sparsity + ca.Sparsity.diag(cm.nX) != ca.Sparsity.banded(cm.nX, 1):
-        return None
-    return form
+    cached = cm._cache.get("tridiagonal_form")
+    if cached is None:
+        form = linear_form(cm)
+        # (the comparison forms two patterns of nX columns: about 0.1 ms at 1000 states,
+        # once per model rather than on every run)
+        cached = cm._cache["tridiagonal_form"] = form if form is not None and (
+            form.sparsity + ca.Sparsity.diag(cm.nX) == ca.Sparsity.banded(cm.nX, 1)) \
+            else False
+    return cached or None
 
 
 #: Fewest states for which a linear, time-invariant ODE runs in the linear form (see
