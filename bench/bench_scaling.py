@@ -38,7 +38,12 @@ The compile of N = 1000 (cache-resident, bound by execution) slows about as much
 of N = 100000 (bound by memory) much less. So the ratio of the *means* flatters when the
 machine is busy, and the growth is read on the *minima*: the fastest N = 1000 compile
 and the fastest N = 100000 compile, both nearest to a calm machine. Means and medians
-are printed beside it, with every run and its passes.
+are printed beside it, with every run and its passes, user and kernel time apart, and
+what one page fault costs the machine before and after. Its peer, run beside each
+compile in a fresh process: the same structural passes written by hand on NumPy/SciPy
+arrays (``structure_on_arrays``: flattening, connection sets, alias elimination,
+matching, BLT; no symbolic expressions), with its own growth and the compile's cost
+over it.
 
 Compile work counted, not timed (``--counted``): the instructions and the data-cache
 misses of compiling the RC ladder at N = 1000 and N = 10000, per flat equation, counted by
@@ -78,6 +83,7 @@ from _common import (clock, growth_exponent, log, logging_alternative, main, pea
 import numpy as np
 import scipy.sparse as sp
 from scipy.integrate import solve_ivp
+from scipy.sparse import csgraph
 
 import mechatron as mt
 from mechatron.library import electrical as el
@@ -252,6 +258,160 @@ def compile_once(n: int) -> dict:
             "peak_rss_MB": peak_rss_mb()}
 
 
+# -- the array peer of the growth -----------------------------------------------------
+#: the variables of a two-pin component, in the compiler's order of declaration
+_TWO_PIN_KEYS = ("v", "i", "p.v", "p.i", "n.v", "n.i")
+
+
+def structure_on_arrays(n: int) -> dict:
+    """The structural work of compiling the RC ladder of ``n`` sections, written by hand on
+    NumPy/SciPy arrays: the peer of the compile's growth per equation (``--growth``).
+
+    Flattening (every variable's name, each class's equations instantiated over its
+    instances by broadcasting, as integer triplets), connection sets (connected
+    components of the connect graph; across variables equal to the set's first member,
+    one flow sum per set), alias elimination (rows of two entries of coefficient +-1
+    joined by connected components, each variable's sign to its representative
+    propagated level by level; a variable fixed to a constant, the ground's voltage,
+    becomes known), the incidence of what is left, its maximum matching (Hopcroft-Karp)
+    and its block-lower-triangular blocks (strongly connected components). No symbolic
+    expression is formed: it is a lower bound on what those passes cost per equation,
+    and on how that cost grows with the model. The counts it returns equal the
+    compiler's (``tests/test_bench.py`` checks them)."""
+    v_, i_, pv, pi_, nv, ni = range(6)
+    ncomp = 2 * n + 1                   # the source, resistors 1..n, capacitors n+1..2n
+    gnd = 6 * ncomp                     # the ground's port: its v, then its i
+    n_var = gnd + 2
+    n_all = n_var + n                   # and each capacitor's der(v), an unknown
+    paths = ["src"] + [f"r{k}" for k in range(n)] + [f"c{k}" for k in range(n)]
+    names = [f"{path}.{key}" for path in paths for key in _TWO_PIN_KEYS]
+    names += ["gnd.port.v", "gnd.port.i"]
+    base = 6 * np.arange(ncomp)
+    rows: list = []
+    cols: list = []
+    coef: list = []
+    n_eq = 0
+
+    def add(bases, template, extra=None):
+        """Each equation of ``template`` (its terms: slot and coefficient, nan for a
+        parameter; slot -1 is ``extra``) once per instance in ``bases``."""
+        nonlocal n_eq
+        for eq in template:
+            for slot, c in eq:
+                rows.append(n_eq + np.arange(bases.size))
+                cols.append(bases + slot if slot >= 0 else extra)
+                coef.append(np.full(bases.size, c))
+            n_eq += bases.size
+
+    # v == p.v - n.v, p.i + n.i == 0, i == p.i for every two-pin component
+    add(base, [((v_, 1.0), (pv, -1.0), (nv, 1.0)), ((pi_, 1.0), (ni, 1.0)),
+               ((i_, 1.0), (pi_, -1.0))])
+    add(base[:1], [((v_, 1.0),)])                      # v == V (a parameter)
+    add(base[1:n + 1], [((v_, 1.0), (i_, np.nan))])    # v == R i
+    add(base[n + 1:], [((i_, -1.0), (-1, np.nan))], extra=n_var + np.arange(n))
+    constant = n_eq                                     # gnd.port.v == 0
+    rows.append(np.array([n_eq]))
+    cols.append(np.array([gnd]))
+    coef.append(np.ones(1))
+    n_eq += 1
+    # the connects, port to port (a port by its first variable, v; its i follows)
+    r, c = base[1:n + 1], base[n + 1:]
+    a = np.concatenate([[base[0] + 2], [base[0] + 4], r + 4, c + 4, r[:-1] + 4])
+    b = np.concatenate([[r[0] + 2], [gnd], c + 2, np.full(n, gnd), r[1:] + 2])
+    ports, at = np.unique(np.concatenate([a, b]), return_inverse=True)
+    m = ports.size
+    graph = sp.coo_matrix((np.ones(a.size), (at[:a.size], at[a.size:])), shape=(m, m))
+    n_sets, label = csgraph.connected_components(graph, directed=False)
+    order = np.lexsort((ports, label))              # each set's members by port
+    first = np.r_[True, label[order][1:] != label[order][:-1]]
+    lead = np.maximum.accumulate(np.where(first, np.arange(m), 0))
+    member, leader = ports[order], ports[order][lead]
+    others = int((~first).sum())                    # across: member.v == first.v
+    rows += [n_eq + np.arange(others)] * 2
+    cols += [member[~first], leader[~first]]
+    coef += [np.ones(others), -np.ones(others)]
+    n_eq += others
+    rows.append(n_eq + label[order])                # through: one sum per set
+    cols.append(member + 1)
+    coef.append(np.ones(m))
+    n_eq += n_sets
+    rows, cols, coef = map(np.concatenate, (rows, cols, coef))
+    n_flat = n_eq
+    # alias elimination
+    unit = np.isfinite(coef) & (np.abs(coef) == 1.0)
+    pair_rows = np.flatnonzero((np.bincount(rows, minlength=n_eq) == 2)
+                               & (np.bincount(rows, unit, minlength=n_eq) == 2))
+    picked = np.isin(rows, pair_rows)
+    o = np.argsort(rows[picked], kind="stable")
+    pair = cols[picked][o].reshape(-1, 2)
+    pk = coef[picked][o].reshape(-1, 2)
+    joined = sp.coo_matrix((np.ones(len(pair)), (pair[:, 0], pair[:, 1])),
+                           shape=(n_all, n_all))
+    _, cls = csgraph.connected_components(joined, directed=False)
+    rep = np.full(cls.max() + 1, n_all)
+    np.minimum.at(rep, cls, np.arange(n_all))       # the lowest variable represents
+    rep = rep[cls]
+    sign = np.where(rep == np.arange(n_all), 1.0, 0.0)
+    ratio = -pk[:, 0] * pk[:, 1]                     # a x + b y == 0: x == ratio y
+    x, y = pair[:, 0], pair[:, 1]
+    while True:
+        to_x = (sign[x] == 0) & (sign[y] != 0)
+        to_y = (sign[y] == 0) & (sign[x] != 0)
+        if not (to_x.any() or to_y.any()):
+            break
+        sign[x[to_x]] = ratio[to_x] * sign[y[to_x]]
+        sign[y[to_y]] = ratio[to_y] * sign[x[to_y]]
+    known = np.zeros(n_all, dtype=bool)
+    known[rep[gnd]] = True
+    keep = np.ones(n_eq, dtype=bool)
+    keep[pair_rows] = False
+    keep[constant] = False
+    kept = keep[rows]
+    kr, kc = rows[kept], rep[cols[kept]]
+    live = ~known[kc]
+    kr, kc = kr[live], kc[live]
+    equations, kr = np.unique(kr, return_inverse=True)
+    # the unknowns: representatives that are neither states (the capacitors' v) nor known
+    state = np.zeros(n_all, dtype=bool)
+    state[rep[base[n + 1:] + v_]] = True
+    unknown = (rep == np.arange(n_all)) & ~state & ~known
+    column = np.full(n_all, -1)
+    column[unknown] = np.arange(int(unknown.sum()))
+    inside = column[kc] >= 0
+    incidence = sp.csr_matrix((np.ones(int(inside.sum())), (kr[inside], column[kc[inside]])),
+                              shape=(equations.size, int(unknown.sum())))
+    incidence.sum_duplicates()
+    matched = csgraph.maximum_bipartite_matching(incidence, perm_type="column")
+    if (matched < 0).any():
+        raise RuntimeError("structure_on_arrays: structurally singular")
+    # equation e depends on equation f when e holds the unknown matched to f
+    row_of = np.empty(incidence.shape[1], dtype=np.int64)
+    row_of[matched] = np.arange(incidence.shape[0])
+    holder = np.repeat(np.arange(incidence.shape[0]), np.diff(incidence.indptr))
+    depends = sp.csr_matrix((np.ones(incidence.nnz), (holder, row_of[incidence.indices])),
+                            shape=(incidence.shape[0],) * 2)
+    blocks, _ = csgraph.connected_components(depends, directed=True, connection="strong")
+    return {"equations_flat": n_flat, "variables_flat": len(names),
+            "after_alias": int(equations.size), "unknowns": int(incidence.shape[1]),
+            "blocks": int(blocks)}
+
+
+def arrays_once(n: int) -> dict:
+    """`structure_on_arrays` of ``n`` sections in this process, after one of 10 (imports
+    and first calls), with its CPU time per flat equation (user and kernel)."""
+    structure_on_arrays(10)
+    gc.collect()
+    before = resource.getrusage(resource.RUSAGE_SELF)
+    cpu = time.process_time()
+    out = structure_on_arrays(n)
+    cpu = time.process_time() - cpu
+    after = resource.getrusage(resource.RUSAGE_SELF)
+    flat = out["equations_flat"]
+    return {"N": n, **out, "cpu_s": cpu, "us_per_equation": 1e6 * cpu / flat,
+            "user_s": after.ru_utime - before.ru_utime,
+            "system_s": after.ru_stime - before.ru_stime}
+
+
 def compile_scaling(sizes: list[int], fresh: bool = True) -> dict:
     """``compile_once`` per N, each in a new process when ``fresh`` (so the peak memory
     is that N's), with the growth of the time per equation between sizes."""
@@ -322,15 +482,22 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
                    per_round: int = 10) -> dict:
     """The growth of the compile CPU time per flat equation from ``small`` to ``large``:
     ``rounds`` rounds of one ``large`` and ``per_round`` ``small`` compiles, each in a
-    fresh process (see the module's docstring for why the minima are compared)."""
+    fresh process (see the module's docstring for why the minima are compared), each
+    followed by its peer (`structure_on_arrays`, in a fresh process too)."""
     spells = [machine_spells()]
     pages = [fresh_page_cost()]
     runs: dict[int, list[dict]] = {small: [], large: []}
+    peer: dict[int, list[dict]] = {small: [], large: []}
+
+    def one(flag: str, n: int) -> dict:
+        done = subprocess.run([sys.executable, __file__, flag, str(n)],
+                              capture_output=True, text=True, check=True)
+        return json.loads(done.stdout.strip().splitlines()[-1])
+
     for k in range(rounds):
         for n in [large] + [small] * per_round:
-            done = subprocess.run([sys.executable, __file__, "--compile-one", str(n)],
-                                  capture_output=True, text=True, check=True)
-            runs[n].append(json.loads(done.stdout.strip().splitlines()[-1]))
+            runs[n].append(one("--compile-one", n))
+            peer[n].append(one("--arrays-one", n))
         log(f"round {k + 1} of {rounds}: N={large} "
             f"{runs[large][-1]['us_per_equation']:.1f} us/equation, N={small} "
             + " ".join(f"{r['us_per_equation']:.1f}" for r in runs[small][-per_round:]))
@@ -361,6 +528,17 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
     # split of one short run is off by a few percent, hence the medians beside)
     growth_user = {k: f(b["user_us_per_equation"]) / f(a["user_us_per_equation"])
                    for k, f in (("median", statistics.median), ("min", min))}
+    # the peer: the same structural passes on arrays, without symbolic expressions
+    on_arrays = {str(n): {"us_per_equation": [r["us_per_equation"] for r in rs],
+                          "min": min(r["us_per_equation"] for r in rs),
+                          "median": statistics.median(r["us_per_equation"] for r in rs)}
+                 for n, rs in peer.items()}
+    pa, pb = on_arrays[str(small)], on_arrays[str(large)]
+    peer_growth = {k: pb[k] / pa[k] for k in ("median", "min")}
+    log(f"peer on arrays (structure without symbolic expressions): minima "
+        f"{pa['min']:.2f} and {pb['min']:.2f} us/equation, growth {peer_growth['min']:.3f} "
+        f"(medians {peer_growth['median']:.3f}); the compile costs "
+        f"{a['min'] / pa['min']:.0f} and {b['min'] / pb['min']:.0f} times as much")
     log(f"growth per equation N={small} to {large}: minima {growth['min']:.3f} "
         f"(goal < 1.3), medians {growth['median']:.3f}, means {growth['mean']:.3f}; "
         f"slow share of the machine {spells[0]['slow_share']:.2f}, "
@@ -370,7 +548,11 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
     return {"small": small, "large": large, "rounds": rounds, "per_round": per_round,
             "sizes": stats, "growth": growth, "growth_user": growth_user, "goal": 1.3,
             "met": growth["min"] < 1.3, "machine_spells_before_after": spells,
-            "fresh_page_cost_before_after": pages}
+            "fresh_page_cost_before_after": pages,
+            "peer_structure_on_arrays": {"sizes": on_arrays, "growth": peer_growth,
+                                         "compile_over_peer_min": {
+                                             str(small): a["min"] / pa["min"],
+                                             str(large): b["min"] / pb["min"]}}}
 
 
 def run_growth(quick: bool = False, rounds: int = 4) -> dict:
@@ -621,6 +803,8 @@ def run_large(quick: bool = False) -> dict:
 if __name__ == "__main__":
     if "--compile-one" in sys.argv:      # one size in this process (compile_scaling)
         print(json.dumps(compile_once(int(sys.argv[sys.argv.index("--compile-one") + 1]))))
+    elif "--arrays-one" in sys.argv:     # the array peer of one size (compile_growth)
+        print(json.dumps(arrays_once(int(sys.argv[sys.argv.index("--arrays-one") + 1]))))
     elif "--counted-one" in sys.argv:    # one process of compile_counted
         at = sys.argv.index("--counted-one")
         counted_one(int(sys.argv[at + 1]), sys.argv[at + 2])

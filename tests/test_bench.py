@@ -150,6 +150,31 @@ def test_compile_growth_reads_what_its_fresh_processes_write(bench_scaling, monk
     for size in (small, large):
         assert len(size["system_us_per_equation"]) == len(size["us_per_equation"])
         assert all(f > 0 for f in size["page_faults_per_equation"])
+    # its peer ran beside each compile, in a fresh process of its own
+    peer = out["peer_structure_on_arrays"]
+    assert [len(peer["sizes"][k]["us_per_equation"]) for k in ("5", "10")] == [2, 1]
+    for stat in ("min", "median"):
+        assert peer["growth"][stat] == pytest.approx(
+            peer["sizes"]["10"][stat] / peer["sizes"]["5"][stat])
+    assert peer["compile_over_peer_min"]["10"] == pytest.approx(
+        large["min"] / peer["sizes"]["10"]["min"])
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 12])
+def test_structure_on_arrays_counts_what_the_compiler_counts(bench_scaling, n):
+    """The array peer of ``--growth`` does the compiler's structural work on the same RC
+    ladder, written independently: its counts of flat equations and variables, of the
+    equations left after alias elimination, of the unknowns matched and of the BLT
+    blocks equal the compiler's report."""
+    import mechatron as mt
+
+    got = bench_scaling.structure_on_arrays(n)
+    report = mt.compile_model(bench_scaling.rc_ladder(n)).report
+    assert got["equations_flat"] == report["equations"]["flat"]
+    assert got["variables_flat"] == report["variables"]["flat"]
+    assert got["after_alias"] == report["equations"]["after_alias"]
+    assert got["unknowns"] == report["variables"]["after_alias"]
+    assert got["blocks"] == report["blocks"]
 
 
 def test_fresh_page_cost_touches_every_page(bench_scaling):
