@@ -12,7 +12,9 @@ import mechatron as mt
 from mechatron.compiler.dimensions import (FREE, NUMBER, component_dimension_problems,
                                            dimension_problems, format_dimension, infer,
                                            unit_dimension)
-from mechatron.compiler.flatten import flatten
+from mechatron.compiler.flatten import _SumEquation, flatten
+from mechatron.core import Across, Connector, Through
+from mechatron.core.domains import ELECTRICAL
 from mechatron.errors import UnitError
 from mechatron.library import blocks
 from mechatron.library import electrical as el
@@ -108,6 +110,48 @@ def test_every_problem_is_reported_once_and_together():
     assert problems[1] == ("WrongResistor 'x2': v == (R*i): the left side is V "
                            "(kg*m^2/(A*s^3)), the right side is A^3*s^3/(kg*m^2). "
                            "Check the units declared for its variables and parameters.")
+
+
+def test_a_flow_sum_over_connector_classes_of_different_units_is_checked():
+    """A flow sum whose terms are all the same variable of one connector class agrees by
+    construction and is not walked; one over two connector classes whose currents
+    differ in dimension is still reported, named by its connection set."""
+
+    class WattPin(Connector, domain=ELECTRICAL):
+        """An electrical pin whose flow is declared in watts (wrong on purpose)."""
+
+        v = Across("V", doc="Electric potential at the pin")
+        i = Through("W", doc="Flow into the pin, in the wrong unit")
+
+    class WattLoad(mt.Component):
+        """A load across two `WattPin`s."""
+
+        p = WattPin(doc="Positive pin")
+        n = WattPin(doc="Negative pin")
+        G = mt.Parameter("W/V", default=1.0, doc="Flow per volt")
+
+        def equations(self):
+            return [self.p.i == self.G * (self.p.v - self.n.v), self.p.i + self.n.i == 0]
+
+    m = mt.System("mixed_flows")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    g = m.add("g", el.ElectricalReference())
+    r = m.add("r", el.Resistor(R=1.0))
+    load = m.add("load", WattLoad())
+    m.connect(src.p, r.p, load.p)       # three members of two classes: a flow sum
+    m.connect(r.n, load.n, src.n, g.port)
+    flat = flatten(m)
+    sums = [eq for eq in flat.equations if type(eq) is _SumEquation]
+    assert len(sums) == 2 and not any(eq.uniform for eq in sums)
+    problems = dimension_problems(flat)
+    assert len(problems) == 2
+    for text in problems:
+        assert "sum of i == 0: it adds" in text and "W (kg*m^2/s^3)" in text, text
+    # a network with pins of one class throughout has its flow sums skipped, and passes
+    flat = flatten(circuit(RightInductor()))
+    sums = [eq for eq in flat.equations if type(eq) is _SumEquation]
+    assert sums and all(eq.uniform for eq in sums)
+    assert dimension_problems(flat) == []
 
 
 def test_a_mismatch_inside_one_side_is_described():

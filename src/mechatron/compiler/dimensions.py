@@ -54,8 +54,8 @@ from itertools import repeat
 import casadi as ca
 
 from mechatron.compiler.flatten import (FlatModel, _bind_symbols, _collect_equations,
-                                        _TemplateEquation, _walk, stack_columns,
-                                        stack_residuals)
+                                        _SumEquation, _TemplateEquation, _walk,
+                                        stack_columns, stack_residuals)
 from mechatron.core.component import Component
 from mechatron.core.context import BuildContext
 from mechatron.core.events import Clock
@@ -510,8 +510,13 @@ def dimension_problems(flat, model=None) -> list[str]:
 
 def _checked(eq) -> bool:
     """Whether the dimensions of ``eq`` are checked: a class template's equations once,
-    in its first instance (read off its row, without forming its origin)."""
-    return type(eq) is not _TemplateEquation or eq.row < eq.template.n_eq
+    in its first instance (read off its row, without forming its origin); a flow sum
+    unless all its terms are the same variable of one connector class (the same unit:
+    it agrees by construction; a sum over connectors of different classes is checked)."""
+    kind = type(eq)
+    if kind is _TemplateEquation:
+        return eq.row < eq.template.n_eq
+    return kind is not _SumEquation or not eq.uniform
 
 
 def check_dimensions(flat, model=None) -> None:

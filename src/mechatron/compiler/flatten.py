@@ -437,12 +437,15 @@ class _SumEquation(FlatEquation):
     gathers the rows from the column (`stack_residuals`). A sum of three terms or more
     is no alias, and says so (``alias``), so that its residual is not read for that."""
 
-    __slots__ = ("row", "column")
+    __slots__ = ("row", "column", "uniform")
 
-    def __init__(self, column: ca.SX, row: int, origin, alias):
+    def __init__(self, column: ca.SX, row: int, origin, alias, uniform: bool = False):
         _RESIDUAL_SLOT.__set__(self, None)
         self.column, self.row, self.origin, self.owner, self.alias = \
             column, row, origin, "", alias
+        #: every term the same variable of the same connector class: the same unit, so
+        #: the sum agrees in its dimensions by construction (the dimension check skips it)
+        self.uniform = uniform
 
     residual = _formed_on_read(_RESIDUAL_SLOT, lambda eq: eq.column[eq.row])
 
@@ -2424,6 +2427,7 @@ def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
     late = flat.__dict__.get("_rows", {})
     row = [_first_row(m.port, late) for m in members]
     offsets = [_binding_plan(type(m.port))[4] for m in members]   # one per class
+    uniform = all(o is offsets[0] for o in offsets)     # every member of one class
     if min(row) < 0 or any(o is not offsets[0] and any(k not in o for k in across + through)
                            for o in offsets):
         row = [f"{m.path}." for m in members]       # by path: key appended
@@ -2444,7 +2448,7 @@ def _physical_set(flat: FlatModel, cset, flow_sums: list) -> None:
             aliases.append((var(j, t), var(0, t), -first.sign * members[j].sign, origin))
         else:   # formed in bulk by _flow_sums
             flow_sums.append(([(var(j, t), m.sign) for j, m in enumerate(members)],
-                              f"{origin}: sum of {t} == 0"))
+                              f"{origin}: sum of {t} == 0", uniform))
 
 
 @functools.lru_cache(maxsize=None)
@@ -2461,7 +2465,7 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
         return
     index: dict = {}        # each variable (by number or by path) -> its column in A
     rows, cols, vals = [], [], []
-    for r, (terms, _) in enumerate(flow_sums):
+    for r, (terms, *_) in enumerate(flow_sums):
         for name, sign in terms:
             rows.append(r)
             cols.append(index.setdefault(name, len(index)))
@@ -2477,8 +2481,9 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
     total = np.bincount(inverse, weights=np.asarray(vals, dtype=float))
     terms = np.bincount(uniq[total != 0] // max(len(index), 1),
                         minlength=len(flow_sums)).tolist()
-    flat.equations += [_SumEquation(sums, r, origin, _NO_ALIAS if terms[r] > 2 else None)
-                       for r, (_, origin) in enumerate(flow_sums)]
+    flat.equations += [_SumEquation(sums, r, origin, _NO_ALIAS if terms[r] > 2 else None,
+                                    uniform)
+                       for r, (_, origin, uniform) in enumerate(flow_sums)]
 
 
 _DOMAINS: dict = {}
