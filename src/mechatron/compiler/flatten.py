@@ -2362,7 +2362,41 @@ def _compatible(a, b) -> str:
             type(a).across_names() != type(b).across_names()):
         return (f"cannot connect '{a.path}' ({type(a).__name__}) with '{b.path}' "
                 f"({type(b).__name__}): the connectors carry different variables.")
+    if isinstance(a, Connector) and type(a) is not type(b):
+        differ = _unit_clash(type(a), type(b))
+        if differ:
+            key, ua, ub = differ
+            return (f"cannot connect '{a.path}' ({type(a).__name__}) with '{b.path}' "
+                    f"({type(b).__name__}): their {key} is declared in {ua} "
+                    f"({_dimension_text(ua)}) and in {ub} ({_dimension_text(ub)}). "
+                    "Declare the connectors' variables in units of one dimension.")
     return ""
+
+
+def _dimension_text(unit: str) -> str:
+    """``kg*m^2/s^3``: a unit's dimension in SI base units, as the dimension check
+    writes it (for a message)."""
+    from mechatron.compiler.dimensions import format_dimension, unit_dimension
+    packed = unit_dimension(unit)
+    return format_dimension(packed) if packed is not None else str(dimensionality(unit))
+
+
+@functools.lru_cache(maxsize=None)
+def _unit_clash(cls_a, cls_b) -> tuple | None:
+    """The first across or through variable that two connector classes of one domain
+    declare in units of different dimensions, as ``(key, unit_a, unit_b)``, else None
+    (once per pair of classes). Joined in a node, such variables would be set equal or
+    summed: what the dimension check of equations does not walk (see
+    `_SumEquation.uniform`) is checked here."""
+    decl_a, decl_b = cls_a._declarations, cls_b._declarations
+    for key in (*cls_a.across_names(), *cls_a.through_names()):
+        other = decl_b.get(key)
+        if other is None:
+            continue
+        ua, ub = decl_a[key].unit, other.unit
+        if ua != ub and dimensionality(ua) != dimensionality(ub):
+            return key, ua, ub
+    return None
 
 
 def _signal_set(flat: FlatModel, cset, problems, model) -> None:
