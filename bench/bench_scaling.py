@@ -412,15 +412,21 @@ def arrays_once(n: int) -> dict:
             "system_s": after.ru_stime - before.ru_stime}
 
 
+def _fresh(flag: str, n: int) -> dict:
+    """This script run with ``flag n`` (``--compile-one``, ``--arrays-one``) in a fresh
+    process: the JSON of its last line."""
+    done = subprocess.run([sys.executable, __file__, flag, str(n)],
+                          capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def compile_scaling(sizes: list[int], fresh: bool = True) -> dict:
     """``compile_once`` per N, each in a new process when ``fresh`` (so the peak memory
     is that N's), with the growth of the time per equation between sizes."""
     rows = []
     for n in sizes:
         if fresh:
-            done = subprocess.run([sys.executable, __file__, "--compile-one", str(n)],
-                                  capture_output=True, text=True, check=True)
-            row = json.loads(done.stdout.strip().splitlines()[-1])
+            row = _fresh("--compile-one", n)
         else:
             row = compile_once(n)
         log(f"rc_ladder N={n} compile alone: cpu {row['compile_cpu_s']:.3f} s "
@@ -488,16 +494,10 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
     pages = [fresh_page_cost()]
     runs: dict[int, list[dict]] = {small: [], large: []}
     peer: dict[int, list[dict]] = {small: [], large: []}
-
-    def one(flag: str, n: int) -> dict:
-        done = subprocess.run([sys.executable, __file__, flag, str(n)],
-                              capture_output=True, text=True, check=True)
-        return json.loads(done.stdout.strip().splitlines()[-1])
-
     for k in range(rounds):
         for n in [large] + [small] * per_round:
-            runs[n].append(one("--compile-one", n))
-            peer[n].append(one("--arrays-one", n))
+            runs[n].append(_fresh("--compile-one", n))
+            peer[n].append(_fresh("--arrays-one", n))
         log(f"round {k + 1} of {rounds}: N={large} "
             f"{runs[large][-1]['us_per_equation']:.1f} us/equation, N={small} "
             + " ".join(f"{r['us_per_equation']:.1f}" for r in runs[small][-per_round:]))
