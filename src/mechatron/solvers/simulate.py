@@ -252,11 +252,8 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
     stats.compile_time = compile_time
     names, units, index, descriptions = _log_names(cm)
     if lazy:
-        rows, states = _state_rows(cm)
+        rows, states, stored_at = _state_rows(cm)
         values = X[:cm.nx] if states == list(range(cm.nx)) else X[states]
-        stored_at = cm._cache.get("state_rows_at")
-        if stored_at is None:       # the same for every run: formed once (1000s of rows)
-            stored_at = cm._cache["state_rows_at"] = {r: k for k, r in enumerate(rows)}
         res = SimResult._of_model(t, values, names, units, index, descriptions,
                                   stats=stats, model_name=cm.name, stored=rows,
                                   source=source, stored_at=stored_at)
@@ -352,11 +349,12 @@ class _Descriptions(Mapping):
         return len(self._formed())
 
 
-def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int]]:
-    """The logged variables that are states: their rows in ``cm.names`` and their indices
-    in ``X``, for each state the output function returns unchanged, so a selective log
-    stores the trajectory's rows as they are (no copy) and they equal what a full log
-    holds bit for bit.
+def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int], dict[int, int]]:
+    """The logged variables that are states: their rows in ``cm.names``, their indices
+    in ``X``, and each row's place among them (``{row: k}``, shared read-only by every
+    log of the model), for each state the output function returns unchanged, so a
+    selective log stores the trajectory's rows as they are (no copy) and they equal what
+    a full log holds bit for bit.
 
     Found by probing rather than by building the output's expression graph (which costs
     memory on large models): at three points where every input (time, states, algebraic
@@ -382,7 +380,8 @@ def _state_rows(cm: CompiledModel) -> tuple[list[int], list[int]]:
                 keep &= y[r] == X[i]
         rows = [a for k, (a, _) in enumerate(pairs) if keep[k]]
         states = [b for k, (_, b) in enumerate(pairs) if keep[k]]
-        cached = cm._cache["state_rows"] = (rows, states)
+        cached = cm._cache["state_rows"] = (rows, states,
+                                            {r: k for k, r in enumerate(rows)})
     return cached
 
 
