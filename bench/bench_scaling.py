@@ -230,6 +230,19 @@ def measure(kind: str, n: int, *, simulate_twice: bool = True, compiles: int = 1
     return row, final, grid
 
 
+def _cpu_of(fn, *args) -> tuple:
+    """``fn(*args)`` and what it took of this process: CPU seconds (`time.process_time`),
+    user and system (kernel) seconds, and minor page faults (the kernel's share is
+    mostly first touches of new memory)."""
+    before, cpu = resource.getrusage(resource.RUSAGE_SELF), time.process_time()
+    out = fn(*args)
+    cpu = time.process_time() - cpu
+    after = resource.getrusage(resource.RUSAGE_SELF)
+    return out, {"cpu_s": cpu, "user_s": after.ru_utime - before.ru_utime,
+                 "system_s": after.ru_stime - before.ru_stime,
+                 "minor_page_faults": after.ru_minflt - before.ru_minflt}
+
+
 def compile_once(n: int) -> dict:
     """Build and compile the RC ladder of ``n`` sections once, in this process: CPU and
     wall time of ``compile_model``, its passes, and the process's peak resident memory.
@@ -238,11 +251,8 @@ def compile_once(n: int) -> dict:
     mt.compile_model(rc_ladder(2))
     gc.collect()
     model, t_build = clock(rc_ladder, n)
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    cpu = time.process_time()
-    cm, t_compile = clock(mt.compile_model, model)
-    cpu = time.process_time() - cpu
-    after = resource.getrusage(resource.RUSAGE_SELF)
+    (cm, t_compile), took = _cpu_of(clock, mt.compile_model, model)
+    cpu = took.pop("cpu_s")
     rep = cm.report
     flat = (rep.get("equations") or {}).get("flat") or 0
     return {"N": n, "build_s": t_build, "compile_s": t_compile, "compile_cpu_s": cpu,
@@ -250,12 +260,7 @@ def compile_once(n: int) -> dict:
             "passes_cpu_s": dict(rep.get("cpu_timings", {})), "equations_flat": flat,
             "states": len(cm.state_names),
             "us_per_equation": 1e6 * cpu / flat if flat else None,
-            # user and system (kernel) CPU, and page faults: the kernel's share is mostly
-            # first touches of new memory
-            "user_s": after.ru_utime - usage.ru_utime,
-            "system_s": after.ru_stime - usage.ru_stime,
-            "minor_page_faults": after.ru_minflt - usage.ru_minflt,
-            "peak_rss_MB": peak_rss_mb()}
+            **took, "peak_rss_MB": peak_rss_mb()}
 
 
 # -- the array peer of the growth -----------------------------------------------------
@@ -401,15 +406,9 @@ def arrays_once(n: int) -> dict:
     and first calls), with its CPU time per flat equation (user and kernel)."""
     structure_on_arrays(10)
     gc.collect()
-    before = resource.getrusage(resource.RUSAGE_SELF)
-    cpu = time.process_time()
-    out = structure_on_arrays(n)
-    cpu = time.process_time() - cpu
-    after = resource.getrusage(resource.RUSAGE_SELF)
-    flat = out["equations_flat"]
-    return {"N": n, **out, "cpu_s": cpu, "us_per_equation": 1e6 * cpu / flat,
-            "user_s": after.ru_utime - before.ru_utime,
-            "system_s": after.ru_stime - before.ru_stime}
+    out, took = _cpu_of(structure_on_arrays, n)
+    return {"N": n, **out, **took,
+            "us_per_equation": 1e6 * took["cpu_s"] / out["equations_flat"]}
 
 
 def _fresh(flag: str, n: int) -> dict:
@@ -473,15 +472,12 @@ def fresh_page_cost(mb: int = 256) -> dict:
     pages = mb * 256
     region = mmap.mmap(-1, pages * 4096)
     view = np.frombuffer(region, dtype=np.uint8)
-    before = resource.getrusage(resource.RUSAGE_SELF)
-    view[::4096] = 1
-    after = resource.getrusage(resource.RUSAGE_SELF)
+    _, took = _cpu_of(view.__setitem__, slice(None, None, 4096), 1)
     del view
     region.close()
-    user, system = after.ru_utime - before.ru_utime, after.ru_stime - before.ru_stime
-    return {"MiB": mb, "us_per_page": 1e6 * (user + system) / pages,
-            "system_us_per_page": 1e6 * system / pages,
-            "page_faults": after.ru_minflt - before.ru_minflt}
+    return {"MiB": mb, "us_per_page": 1e6 * (took["user_s"] + took["system_s"]) / pages,
+            "system_us_per_page": 1e6 * took["system_s"] / pages,
+            "page_faults": took["minor_page_faults"]}
 
 
 def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
