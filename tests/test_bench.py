@@ -6,6 +6,7 @@ than at the end of a long benchmark run. Speed itself is never asserted."""
 
 import importlib
 import inspect
+import itertools
 import json
 import math
 import shutil
@@ -141,12 +142,18 @@ def test_compile_growth_reads_what_its_fresh_processes_write(bench_scaling, monk
     assert len(small["us_per_equation"]) == 2 and len(large["us_per_equation"]) == 1
     for stat in ("mean", "median", "min"):
         assert out["growth"][stat] == pytest.approx(large[stat] / small[stat])
-    assert out["met"] == (out["growth"]["min"] < out["goal"])
+    # the minima over equally many runs: the one large run against the mean of the
+    # small ones (the expected minimum of one draw)
+    assert out["growth"]["min_equal_draws"] == pytest.approx(
+        large["min"] / statistics.mean(small["us_per_equation"]))
+    assert out["met"] == (out["growth"]["min_equal_draws"] < out["goal"])
     assert set(large["passes_us_per_equation"][0]) >= {"flatten", "structure", "total"}
     # user and kernel time apart: user alone grows as the ratio of the user times
     for stat, f in (("min", min), ("median", statistics.median)):
         assert out["growth_user"][stat] == pytest.approx(
             f(large["user_us_per_equation"]) / f(small["user_us_per_equation"]))
+    assert out["growth_user"]["min_equal_draws"] == pytest.approx(
+        min(large["user_us_per_equation"]) / statistics.mean(small["user_us_per_equation"]))
     for size in (small, large):
         assert len(size["system_us_per_equation"]) == len(size["us_per_equation"])
         assert all(f > 0 for f in size["page_faults_per_equation"])
@@ -158,6 +165,21 @@ def test_compile_growth_reads_what_its_fresh_processes_write(bench_scaling, monk
             peer["sizes"]["10"][stat] / peer["sizes"]["5"][stat])
     assert peer["compile_over_peer_min"]["10"] == pytest.approx(
         large["min"] / peer["sizes"]["10"]["min"])
+
+
+def test_expected_min_is_the_mean_minimum_over_every_choice(bench_scaling):
+    """`expected_min(values, k)`, the fastest of k runs expected from a larger sample
+    (what `--growth` compares with the fastest of k large runs), equals the mean of the
+    minima over every choice of k of the values, ties and any order included."""
+    values = [3.0, 1.5, 2.0, 2.0, 7.25, 0.5, 4.0]
+    for k in range(1, len(values) + 1):
+        choices = list(itertools.combinations(values, k))
+        assert bench_scaling.expected_min(values, k) == pytest.approx(
+            sum(map(min, choices)) / len(choices))
+    assert bench_scaling.expected_min(values, 1) == pytest.approx(statistics.mean(values))
+    assert bench_scaling.expected_min(values, len(values)) == min(values)
+    with pytest.raises(ValueError, match="3 draws from 2 values"):
+        bench_scaling.expected_min([1.0, 2.0], 3)
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 12])
