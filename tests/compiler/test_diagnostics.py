@@ -30,6 +30,51 @@ def test_network_without_reference():
         mt.compile_model(rc(ground=False))
 
 
+def _networks(order):
+    """A grounded RC circuit; a loop of a source, a resistor and a converter's pins with
+    no electrical reference, the converter's frame held by a rotational reference; a
+    loop of a source and a resistor alone. Parts are added in ``order``."""
+    from mechatron.library import electromechanical as em
+
+    m = mt.System("nets")
+    parts = {"src": el.DCVoltageSource(V=1.0), "r1": el.Resistor(R=1.0),
+             "c1": el.Capacitor(C=1.0), "g": el.ElectricalReference(),
+             "src2": el.DCVoltageSource(V=2.0), "r2": el.Resistor(R=2.0),
+             "emf": em.RotationalEMF(k=0.5), "j": rot.Inertia(J=1.0),
+             "frame": rot.RotationalReference(),
+             "src3": el.DCVoltageSource(V=3.0), "r3": el.Resistor(R=3.0)}
+    p = {name: m.add(name, parts[name]) for name in order}
+    m.connect(p["src"].p, p["r1"].p)
+    m.connect(p["r1"].n, p["c1"].p)
+    m.connect(p["src"].n, p["c1"].n, p["g"].port)
+    m.connect(p["src2"].p, p["r2"].p)
+    m.connect(p["r2"].n, p["emf"].p)
+    m.connect(p["emf"].n, p["src2"].n)
+    m.connect(p["emf"].A, p["j"].port)
+    m.connect(p["emf"].B, p["frame"].port)
+    m.connect(p["src3"].p, p["r3"].p)
+    m.connect(p["r3"].n, p["src3"].n)
+    return m
+
+
+@pytest.mark.parametrize("order", [
+    ["src", "r1", "c1", "g", "src2", "r2", "emf", "j", "frame", "src3", "r3"],
+    ["r3", "frame", "emf", "r2", "g", "c1", "src3", "src2", "j", "r1", "src"]])
+def test_each_network_without_reference_is_named_once(order):
+    """Networks are joined through the components whose ports of one domain they meet:
+    the converter joins its two pins, and its two flanges, not its pins with its
+    flanges, so the rotational reference on its frame does not ground its circuit. The
+    circuit with its reference passes; each loop without one is reported once, with
+    its own parts only, in the order of its first node, whatever order the parts were
+    added in."""
+    with pytest.raises(ModelError) as info:
+        mt.compile_model(_networks(order))
+    found = [p for p in info.value.problems if "has no reference" in p]
+    assert len(found) == 2
+    assert found[0].startswith("electrical network of emf, r2, src2 has no reference")
+    assert found[1].startswith("electrical network of r3, src3 has no reference")
+
+
 def test_unconnected_port_is_named():
     m = rc()
     m.add("r2", el.Resistor(R=2.0))

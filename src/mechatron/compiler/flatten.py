@@ -16,10 +16,12 @@ from itertools import repeat
 
 import casadi as ca
 import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
-from mechatron.core.connections import connection_sets, is_driver, port_key, root_of
+from mechatron.core.connections import connection_sets, is_driver, port_key
 from mechatron.core.context import BuildContext
 from mechatron.core.declarations import (Across, Discrete, Input, Output, Parameter,
                                          ParameterExpression, Start, Through, Variable)
@@ -792,7 +794,9 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     elements = list(_walk(model))
     planned, folded = plan_subsystems(model, elements)
     components = flat.components
+    classes = set()         # every class in the tree: passes that need few skip the walk
     for el in elements:
+        classes.add(type(el))
         if isinstance(el, Component):
             if el._partial and el is not model:
                 problems.append(f"{el.describe()}: {type(el).__name__} is a partial "
@@ -803,7 +807,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     try:
         with flat.context:
             connects = _collect_equations(flat, elements, problems, planned)
-            _discrete_declarations(flat, elements, problems)
+            _discrete_declarations(flat, elements, problems, classes)
         _connections(flat, model, elements, connects, problems, planned, folded)
     finally:
         for el in elements:
@@ -2116,6 +2120,14 @@ def _short(expr, limit: int = 80) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
+def _signal_owners(elements) -> dict[str, SignalRef]:
+    """Each signal of the tree by the name of its bound symbol (its path): what a
+    ``connect`` given symbols instead of ports resolves them by (`_resolve`). Formed
+    only when a connect needs it, not on every compile (a walk over every element)."""
+    return {f"{el.path}.{key}" if el.path else key: SignalRef(el, key)
+            for el in elements for key in _signal_keys(type(el))}
+
+
 def _resolve(flat: FlatModel, port, sym_owner):
     """A Connector, a SignalRef, or a bound signal symbol -> Connector or SignalRef."""
     if isinstance(port, (Connector, SignalRef)):
@@ -2133,10 +2145,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     (:mod:`mechatron.core.connections`), turned into aliases and flow sums; the
     subsystems ``planned`` are wired by their class's plan, their ports ``folded`` into
     the nodes they join (:mod:`mechatron.compiler.folding`)."""
-    sym_owner: dict[str, SignalRef] = {}
-    for el in elements:
-        for key in _signal_keys(type(el)):
-            sym_owner[f"{el.path}.{key}" if el.path else key] = SignalRef(el, key)
+    sym_owner: dict[str, SignalRef] | None = None   # formed for the first bound symbol
     joined = []
     tried: set[tuple] = set()  # ports of a failed connect: not reported again as open
     if planned and _reaches_inside(connects, planned):
@@ -2153,7 +2162,12 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     for con, writer in connects:
         resolved = []
         for p in con.ports:
-            r = p if isinstance(p, port_types) else _resolve(flat, p, sym_owner)
+            if isinstance(p, port_types):
+                r = p
+            else:
+                if sym_owner is None:
+                    sym_owner = _signal_owners(elements)
+                r = _resolve(flat, p, sym_owner)
             if r is None:
                 where = writer.path or flat.name
                 problems.append(f"{where}: connect() takes ports, got {p!r}. Pass a port "
@@ -2235,7 +2249,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
                 if port_key(SignalRef(el, key)) not in connected:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
                                     "connected. Connect a source, e.g. blocks.Constant.")
-    _check_references(flat, model, elements, nodes, problems)
+    _check_references(nodes, problems)
 
 
 def _reaches_inside(connects, planned) -> bool:
@@ -2530,49 +2544,57 @@ def _domain_id(cls) -> int:
     return id(_DOMAINS.setdefault(cls.domain, cls.domain))
 
 
-def _check_references(flat, model, elements, nodes, problems) -> None:
+def _check_references(nodes, problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
-    the ports of each physical node ``nodes`` (lists of members; a subsystem's port is one
-    node inside and outside) and the ports of one domain on each component."""
-    index: dict[int, int] = {}          # id(port) -> its number, in tree order
-    parent: list[int] = []              # union-find over the numbers
+    the physical nodes ``nodes`` (lists of members; a subsystem's port is one node inside
+    and outside) that meet on a component: the ports of one domain on a component are
+    one network (a resistor's two pins; a motor's two pins, apart from its shaft).
 
-    for el in elements:
-        if not isinstance(el, Component):
-            continue
-        first: dict[int, int] = {}     # domain -> the first port of it on el
-        for port in el._children.values():
-            if isinstance(port, Connector):
-                k = index[id(port)] = len(parent)
-                i = first.setdefault(_domain_id(type(port)), k)
-                parent.append(i)        # joined to the first port of its domain
+    Read off the nodes' members alone, not by a walk over every element: each member's
+    component and domain get a number, and the networks are the connected components of
+    the graph that joins each node to those numbers (a port that is no component's is a
+    network of its own). A network is grounded when one of its members belongs to a
+    reference component; the others are reported in the order of their first node."""
+    if not nodes:
+        return
+    number: dict = {}       # (id of a component, its domain), or id(port) -> number
+    at: list[int] = []      # each member's number, node by node
+    grounded: list[bool] = []
+    sizes: list[int] = []
     for members in nodes:
-        ra = None
+        reference = False
         for m in members:
-            k = index.get(id(m.port))
-            if k is None:               # not a port of a component: a network of its own
-                k = index[id(m.port)] = len(parent)
-                parent.append(k)
-            rb = root_of(parent, k)
-            if ra is None:
-                ra = rb
-            elif rb != ra:
-                parent[rb] = ra
-    # a node's members share their network
-    roots = [root_of(parent, index[id(members[0].port)]) for members in nodes]
-    grounded: set[int] = set()
-    for root, members in zip(roots, nodes):
-        if root not in grounded and any(m.port._parent is not None and
-                                        m.port._parent._reference for m in members):
-            grounded.add(root)
-    # the ports of the networks without a reference (for the message)
-    networks: dict[int, list[Connector]] = {}
-    for root, members in zip(roots, nodes):
-        if root not in grounded:
-            networks.setdefault(root, []).extend([m.port for m in members])
-    for root, plist in networks.items():
+            port = m.port
+            owner = port._parent
+            if isinstance(owner, Component):
+                key = (id(owner), _domain_id(type(port)))
+                reference = reference or owner._reference
+            else:
+                key = id(port)
+                reference = reference or (owner is not None and owner._reference)
+            k = number.get(key)
+            if k is None:
+                k = number[key] = len(number)
+            at.append(k)
+        grounded.append(reference)
+        sizes.append(len(members))
+    if all(grounded):
+        return
+    n = len(nodes)
+    node_of = np.repeat(np.arange(n), sizes)
+    graph = sparse.coo_matrix((np.ones(len(at), dtype=np.int8),
+                               (node_of, n + np.asarray(at, dtype=np.int64))),
+                              shape=(n + len(number),) * 2)
+    _, label = csgraph.connected_components(graph, directed=False)
+    label = label[:n]
+    has_reference = np.zeros(label.max() + 1, dtype=bool)
+    has_reference[label[np.asarray(grounded)]] = True
+    networks: dict[int, list] = {}      # in the order of their first node
+    for i in np.flatnonzero(~has_reference[label]).tolist():
+        networks.setdefault(int(label[i]), []).extend([m.port for m in nodes[i]])
+    for plist in networks.values():
         domain = type(plist[0]).domain
-        if root in grounded or domain is None or not domain.needs_reference:
+        if domain is None or not domain.needs_reference:
             continue
         owners = sorted({p._parent.path for p in plist if p._parent is not None})
         problems.append(f"{domain.name} network of {', '.join(owners)} has no reference. "
@@ -2587,12 +2609,13 @@ def _discrete_keys(cls) -> tuple:
     return tuple((k, d) for k, d in cls._declarations.items() if isinstance(d, Discrete))
 
 
-def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
+def _discrete_declarations(flat: FlatModel, elements, problems, classes) -> None:
     """Record the discrete variables with their kind and collect initial equations.
 
     A ``Discrete`` declaration is a discrete state even if no action assigns it (then it
     keeps its start value: ``der(v) == 0``); an action target that is not differentiated
     anywhere is a discrete Real (its ``der(v) == 0`` was added by ``_discrete_states``).
+    ``classes``: the class of every element.
     """
     ctx = flat.context
     # the equations der(v) == 0 of `_discrete_states`, which only event actions add
@@ -2602,15 +2625,14 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
             if name:
                 flat.discrete[name] = "real"
     # per class: its Discrete declarations, and whether it writes initial equations
-    # (worked out once per class, not once per element)
-    info: dict[type, tuple] = {}
+    # (worked out once per class, not once per element); no walk over the elements
+    # when no class has either
+    info = {cls: (_discrete_keys(cls), issubclass(cls, Component) and
+                  bool(_own_methods(cls, "initial_equations"))) for cls in classes}
+    if not any(keys or initial for keys, initial in info.values()):
+        return
     for el in elements:
-        cls = type(el)
-        got = info.get(cls)
-        if got is None:
-            got = info[cls] = (_discrete_keys(cls), isinstance(el, Component) and
-                               bool(_own_methods(cls, "initial_equations")))
-        for key, decl in got[0]:
+        for key, decl in info[type(el)][0]:
             path = _join(el.path, key)
             sym_name = flat.variables[path].sym.name()
             if sym_name not in flat.discrete and sym_name in ctx.derivative:
