@@ -40,9 +40,9 @@ machine is busy, and the growth is read on the *minima*, the runs nearest to a c
 machine, taken over equally many runs of each size: the fastest of the N = 100000
 compiles against the fastest N = 1000 compile expected among as many (``expected_min``:
 the mean over every choice of that many of its runs). Even on a calm machine the short
-N = 1000 compiles spread by 5 % either way and the long ones by a few tenths of one, so
-the fastest of thirty lies further into its spread than the fastest of three: the ratio
-of the plain minima (printed beside) reads about 0.1 high. Means and medians are
+N = 1000 compiles spread by 5 % either way and the long ones by a few tenths of a
+percent, so the fastest of thirty lies further into its spread than the fastest of
+three: the ratio of the plain minima (printed beside) reads about 0.1 high. Means and medians are
 printed beside it, with every run and its passes, user and kernel time apart, and
 what one page fault costs the machine before and after. Its peer, run beside each
 compile in a fresh process: the same structural passes written by hand on NumPy/SciPy
