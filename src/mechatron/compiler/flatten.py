@@ -633,6 +633,9 @@ class FlatModel:
     equations: list[FlatEquation] = field(default_factory=list)
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
     components: dict[str, str] = field(default_factory=dict)  # path -> class name
+    #: the class of every element of the tree (a pass that few classes need skips the
+    #: walk over the elements when none of them is there)
+    classes: frozenset = frozenset()
     time_scales: list = field(default_factory=list)           # SX of parameters
     #: Each connection set as a list of (port path, Domain, is_output); ``is_output`` is
     #: True for a signal output driving the set. For diagrams and reports.
@@ -794,7 +797,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     elements = list(_walk(model))
     planned, folded = plan_subsystems(model, elements)
     components = flat.components
-    classes = set()         # every class in the tree: passes that need few skip the walk
+    classes = set()
     for el in elements:
         classes.add(type(el))
         if isinstance(el, Component):
@@ -802,6 +805,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
                 problems.append(f"{el.describe()}: {type(el).__name__} is a partial "
                                 "class (an interface); use a concrete component.")
             components[el._path_cache] = type(el).__name__
+    flat.classes = frozenset(classes)
     _bind_symbols(flat, elements, problems, folded)
     _external_inputs(flat, model)
     try:

@@ -48,9 +48,13 @@ def compile_model(model: Component, *, name: str | None = None,
             gc.enable()
 
 
-def _external_blocks(model: Component) -> list[dict]:
+def _external_blocks(model: Component, classes=None) -> list[dict]:
     """What each part stepped outside the model's functions needs (an imported FMU, see
-    :mod:`mechatron.fmi`): the ``external_block()`` of every such part, in tree order."""
+    :mod:`mechatron.fmi`): the ``external_block()`` of every such part, in tree order.
+    No walk over the tree when no class among ``classes`` (the classes of its
+    elements, if given) has that method."""
+    if classes is not None and not any(hasattr(cls, "external_block") for cls in classes):
+        return []
     out, stack = [], [model]
     while stack:
         el = stack.pop()
@@ -372,7 +376,7 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         "relation_labels": list(events.labels),
         "discrete": dict(flat.discrete),
         "initial_equations": [str(eq.origin) for eq in flat.initial_equations],
-        "external_blocks": _external_blocks(model),
+        "external_blocks": _external_blocks(model, flat.classes),
         "timings": timings,
         "cpu_timings": cpu_timings,
     }
