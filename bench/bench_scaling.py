@@ -42,9 +42,9 @@ compiles against the fastest N = 1000 compile expected among as many (``expected
 the mean over every choice of that many of its runs). Even on a calm machine the short
 N = 1000 compiles spread by 5 % either way and the long ones by a few tenths of a
 percent, so the fastest of thirty lies further into its spread than the fastest of
-three: the ratio of the plain minima (printed beside) reads about 0.1 high. Means and medians are
-printed beside it, with every run and its passes, user and kernel time apart, and
-what one page fault costs the machine before and after. Its peer, run beside each
+three: the ratio of the plain minima (printed beside) reads about 0.1 high. Means and
+medians are printed beside it, with every run and its passes, user and kernel time
+apart, and what one page fault costs the machine before and after. Its peer, run beside each
 compile in a fresh process: the same structural passes written by hand on NumPy/SciPy
 arrays (``structure_on_arrays``: flattening, connection sets, alias elimination,
 matching, BLT; no symbolic expressions), with its own growth and the compile's cost
@@ -498,6 +498,16 @@ def expected_min(values: list[float], k: int) -> float:
     return sum(x * math.comb(n - 1 - i, k - 1) for i, x in enumerate(v)) / math.comb(n, k)
 
 
+def _growth_of(small: list[float], large: list[float]) -> dict:
+    """The growth from the runs ``small`` to the runs ``large`` (figures per equation):
+    the ratio of their means, medians and minima, and ``min_equal_draws``, the fastest
+    large run over the fastest small run expected among as many (`expected_min`)."""
+    return {"mean": statistics.mean(large) / statistics.mean(small),
+            "median": statistics.median(large) / statistics.median(small),
+            "min": min(large) / min(small),
+            "min_equal_draws": min(large) / expected_min(small, len(large))}
+
+
 def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
                    per_round: int = 10) -> dict:
     """The growth of the compile CPU time per flat equation from ``small`` to ``large``:
@@ -535,25 +545,20 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
                            for k, t in r["passes_cpu_s"].items()} for r in runs[n]]}
              for n, v in per.items()}
     a, b = stats[str(small)], stats[str(large)]
-    growth = {k: b[k] / a[k] for k in ("mean", "median", "min")}
-    # the minima over equally many runs of each size (see the module's docstring): what
-    # `met` reads
-    growth["min_equal_draws"] = b["min"] / expected_min(per[small], len(per[large]))
-    # user time alone, on the minima as above: the compiler's own growth, without the
-    # kernel's share of the page faults
-    # (the kernel splits a process's CPU time into user and system by samples: the
-    # split of one short run is off by a few percent, hence the medians beside)
-    growth_user = {k: f(b["user_us_per_equation"]) / f(a["user_us_per_equation"])
-                   for k, f in (("median", statistics.median), ("min", min))}
-    growth_user["min_equal_draws"] = min(b["user_us_per_equation"]) / expected_min(
-        a["user_us_per_equation"], len(b["user_us_per_equation"]))
+    # `met` reads the minima over equally many runs of each size (see the module's
+    # docstring)
+    growth = _growth_of(per[small], per[large])
+    # user time alone: the compiler's own growth, without the kernel's share of the page
+    # faults (the kernel splits a process's CPU time into user and system by samples:
+    # the split of one short run is off by a few percent, hence the medians beside)
+    growth_user = _growth_of(split[small]["user"], split[large]["user"])
     # the peer: the same structural passes on arrays, without symbolic expressions
     on_arrays = {str(n): {"us_per_equation": [r["us_per_equation"] for r in rs],
                           "min": min(r["us_per_equation"] for r in rs),
                           "median": statistics.median(r["us_per_equation"] for r in rs)}
                  for n, rs in peer.items()}
     pa, pb = on_arrays[str(small)], on_arrays[str(large)]
-    peer_growth = {k: pb[k] / pa[k] for k in ("median", "min")}
+    peer_growth = _growth_of(pa["us_per_equation"], pb["us_per_equation"])
     log(f"peer on arrays (structure without symbolic expressions): minima "
         f"{pa['min']:.2f} and {pb['min']:.2f} us/equation, growth {peer_growth['min']:.3f} "
         f"(medians {peer_growth['median']:.3f}); the compile costs "
