@@ -811,7 +811,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     try:
         with flat.context:
             connects = _collect_equations(flat, elements, problems, planned)
-            _discrete_declarations(flat, elements, problems, classes)
+            _discrete_declarations(flat, elements, problems)
         _connections(flat, model, elements, connects, problems, planned, folded)
     finally:
         for el in elements:
@@ -2613,13 +2613,12 @@ def _discrete_keys(cls) -> tuple:
     return tuple((k, d) for k, d in cls._declarations.items() if isinstance(d, Discrete))
 
 
-def _discrete_declarations(flat: FlatModel, elements, problems, classes) -> None:
+def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     """Record the discrete variables with their kind and collect initial equations.
 
     A ``Discrete`` declaration is a discrete state even if no action assigns it (then it
     keeps its start value: ``der(v) == 0``); an action target that is not differentiated
     anywhere is a discrete Real (its ``der(v) == 0`` was added by ``_discrete_states``).
-    ``classes``: the class of every element.
     """
     ctx = flat.context
     # the equations der(v) == 0 of `_discrete_states`, which only event actions add
@@ -2630,9 +2629,9 @@ def _discrete_declarations(flat: FlatModel, elements, problems, classes) -> None
                 flat.discrete[name] = "real"
     # per class: its Discrete declarations, and whether it writes initial equations
     # (worked out once per class, not once per element); no walk over the elements
-    # when no class has either
+    # when no class of the tree (`FlatModel.classes`) has either
     info = {cls: (_discrete_keys(cls), issubclass(cls, Component) and
-                  bool(_own_methods(cls, "initial_equations"))) for cls in classes}
+                  bool(_own_methods(cls, "initial_equations"))) for cls in flat.classes}
     if not any(keys or initial for keys, initial in info.values()):
         return
     for el in elements:

@@ -48,12 +48,12 @@ def compile_model(model: Component, *, name: str | None = None,
             gc.enable()
 
 
-def _external_blocks(model: Component, classes=None) -> list[dict]:
+def _external_blocks(model: Component, classes: frozenset) -> list[dict]:
     """What each part stepped outside the model's functions needs (an imported FMU, see
     :mod:`mechatron.fmi`): the ``external_block()`` of every such part, in tree order.
-    No walk over the tree when no class among ``classes`` (the classes of its
-    elements, if given) has that method."""
-    if classes is not None and not any(hasattr(cls, "external_block") for cls in classes):
+    No walk over the tree when no class among ``classes`` (the classes of its elements,
+    `FlatModel.classes`) has that method."""
+    if not any(hasattr(cls, "external_block") for cls in classes):
         return []
     out, stack = [], [model]
     while stack:
