@@ -12,7 +12,8 @@ import functools
 from collections.abc import (ItemsView, Mapping, MutableMapping, MutableSequence,
                              ValuesView)
 from dataclasses import dataclass, field
-from itertools import repeat
+from itertools import chain, repeat
+from operator import attrgetter
 
 import casadi as ca
 import numpy as np
@@ -351,16 +352,18 @@ class FoldedColumns:
     (tree order), a port's variables together in declaration order: their ``names``,
     ``units`` and ``docs``, each one's ``position`` (logged after the first ``position``
     variables of the model), its port's ``order`` in the tree (to place ports bound late,
-    `_declaration_order`) and its ``terms``, the rows of the model variables it sums (an
+    `_declaration_order`) and its terms, the rows of the model variables it sums (an
     across variable the node's first member's, a through variable those of the inside
-    members of its set)."""
+    members of its set): variable ``k``'s are ``term_rows[term_ptr[k]:term_ptr[k + 1]]``
+    (compressed rows, as a CSR matrix's)."""
 
-    __slots__ = ("names", "units", "docs", "position", "order", "terms")
+    __slots__ = ("names", "units", "docs", "position", "order", "term_ptr", "term_rows")
 
     def __init__(self, names: list, units: list, docs: list, position: list,
-                 order: list, terms: list):
+                 order: list, term_ptr: np.ndarray, term_rows: np.ndarray):
         self.names, self.units, self.docs = names, units, docs
-        self.position, self.order, self.terms = position, order, terms
+        self.position, self.order = position, order
+        self.term_ptr, self.term_rows = term_ptr, term_rows
 
     def __len__(self) -> int:
         return len(self.names)
@@ -369,6 +372,16 @@ class FoldedColumns:
     def ports(self) -> list[str]:
         """The paths of the folded ports, in order (for messages and tests)."""
         return list(dict.fromkeys(name.rpartition(".")[0] for name in self.names))
+
+
+def _segments(ptr: np.ndarray, take: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For the segments ``take`` of compressed rows ``ptr`` (as a CSR matrix's), in that
+    order: the place of each of their entries among all entries, and the index into
+    ``take`` of the segment each one belongs to."""
+    counts = ptr[take + 1] - ptr[take]
+    owner = np.repeat(np.arange(take.size), counts)
+    within = np.arange(owner.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    return ptr[take][owner] + within, owner
 
 
 @dataclass(slots=True)
@@ -650,18 +663,25 @@ class FlatModel:
     #: their variables are never unknowns, and are logged from their node.
     folded: FoldedColumns | None = None
 
-    def folded_columns(self) -> tuple[list, list, list, np.ndarray, list]:
+    def folded_columns(self) -> tuple[list, list, list, np.ndarray,
+                                      tuple[np.ndarray, np.ndarray]]:
         """The variables of the folded ports (`FoldedColumns`): their names, units and
-        docs, each one's position and the rows of the model's variables it sums."""
+        docs, each one's position and the rows of the model's variables it sums, as
+        compressed rows ``(ptr, rows)``."""
         f = self.folded
         if f is None:
-            return [], [], [], np.zeros(0, dtype=np.intp), []
+            empty = np.zeros(0, dtype=np.intp)
+            return [], [], [], empty, (np.zeros(1, dtype=np.intp), empty)
         position = np.array(f.position, dtype=np.intp)
         if np.any(position[1:] < position[:-1]):    # (tree order keeps them sorted)
-            k = np.argsort(position, kind="stable").tolist()
-            return ([f.names[i] for i in k], [f.units[i] for i in k],
-                    [f.docs[i] for i in k], position[k], [f.terms[i] for i in k])
-        return f.names, f.units, f.docs, position, f.terms
+            k = np.argsort(position, kind="stable")
+            at, _ = _segments(f.term_ptr, k)
+            counts = np.diff(f.term_ptr)[k]
+            ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+            k_list = k.tolist()
+            return ([f.names[i] for i in k_list], [f.units[i] for i in k_list],
+                    [f.docs[i] for i in k_list], position[k], (ptr, f.term_rows[at]))
+        return f.names, f.units, f.docs, position, (f.term_ptr, f.term_rows)
 
     @property
     def n_folded(self) -> int:
@@ -875,7 +895,7 @@ def _declaration_order(flat: FlatModel) -> None:
         folded.position = [p + sum(len(names) for position, k, names in late
                                    if (position, k) < (p, o))
                            for p, o in zip(folded.position, folded.order)]
-        folded.terms = [[moved_to[r] for r in rows] for rows in folded.terms]
+        folded.term_rows = np.asarray(moved_to, dtype=np.intp)[folded.term_rows]
 
 
 class _Problems(list):
@@ -2276,47 +2296,94 @@ class _Joined:
 def _folded_variables(flat: FlatModel, folded, folding) -> None:
     """Record the variables of the folded ports, for logging them (`FlatModel.folded`, a
     `FoldedColumns`): the rows of the variables each one sums, read off the rows of the
-    member ports (each port's own class places the key), in one pass over the ports."""
+    member ports (each member's own class places the key). The rows and classes of all
+    the ports are read by maps over them, and the terms formed by array operations per
+    class of folded port; Python runs per port only to gather each one's members."""
     node, flow, late = folding.node, folding.flow, flat.__dict__.get("_rows", {})
-    offsets = {}            # class -> {key: place among its variables}
-    plans = {}              # class of a folded port -> its keys, units, docs, kinds
+    pids = list(folded)
+    ports = list(folded.values())
+    firsts = [node[pid].port for pid in pids]
+    insides = [flow[pid] for pid in pids]
+    n_in = np.fromiter(map(len, insides), dtype=np.intp, count=len(pids))
+    inner = [m.port for members in insides for m in members]
+    b_first, b_inner = _rows_of(firsts, late), _rows_of(inner, late)
+    # the classes met, numbered, and the place of each key among each one's variables
+    types = list(map(type, ports))
+    kinds = {cls: [(key, kind == "across") for key, kind, *_ in _declaration_plan(cls)[1]]
+             for cls in dict.fromkeys(types)}
+    number = {cls: k for k, cls in enumerate(dict.fromkeys([*types, *map(type, firsts),
+                                                            *map(type, inner)]))}
+    key_of = {key: j for j, key in enumerate(dict.fromkeys(
+        key for plan in kinds.values() for key, _ in plan))}
+    place = np.full((len(number), len(key_of)), -1, dtype=np.intp)
+    for cls, k in number.items():
+        for key, at in _binding_plan(cls)[4].items():
+            if key in key_of:
+                place[k, key_of[key]] = at
+    c_port = np.fromiter(map(number.__getitem__, types), dtype=np.intp, count=len(types))
+    c_first = np.fromiter(map(number.__getitem__, map(type, firsts)), dtype=np.intp,
+                          count=len(firsts))
+    c_inner = np.fromiter(map(number.__getitem__, map(type, inner)), dtype=np.intp,
+                          count=len(inner))
+    # each port's variables: where they start, and how many terms each one has
+    per_class = np.zeros(len(number), dtype=np.intp)
+    for cls, plan in kinds.items():
+        per_class[number[cls]] = len(plan)
+    var_count = per_class[c_port]
+    var_start = np.cumsum(var_count) - var_count
+    counts = np.zeros(int(var_count.sum()), dtype=np.intp)
+    for cls, plan in kinds.items():
+        mine = np.flatnonzero(c_port == number[cls])
+        for j, (_, across) in enumerate(plan):
+            counts[var_start[mine] + j] = 1 if across else n_in[mine]
+    ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+    rows = np.empty(ptr[-1], dtype=np.intp)
+    in_ptr = np.concatenate([[0], np.cumsum(n_in)]).astype(np.intp)
+    for cls, plan in kinds.items():
+        mine = np.flatnonzero(c_port == number[cls])
+        members, owner = _segments(in_ptr, mine)
+        for j, (key, across) in enumerate(plan):
+            k = key_of[key]
+            if across:      # the node's first member's
+                at, base, offset = ptr[var_start[mine] + j], b_first[mine], \
+                    place[c_first[mine], k]
+            else:           # the inside members' of its set
+                at = ptr[var_start[mine[owner]] + j] + (members - in_ptr[mine[owner]])
+                base, offset = b_inner[members], place[c_inner[members], k]
+            if offset.size and offset.min() < 0:
+                raise AssertionError(f"a member of the node of a folded {cls.__name__} "
+                                     f"has no variable {key}")
+            rows[at] = base + offset
+    suffixes = {cls: ["." + key for key, _ in plan] for cls, plan in kinds.items()}
+    names = [path + sfx for path, sfxs in zip(map(_PATH_OF, ports),
+                                             map(suffixes.__getitem__, types))
+             for sfx in sfxs]
+    units = list(chain.from_iterable(map({cls: _folded_plan(cls)[1] for cls in kinds}
+                                         .__getitem__, types)))
+    docs = list(chain.from_iterable(map({cls: _folded_plan(cls)[2] for cls in kinds}
+                                        .__getitem__, types)))
+    position = np.repeat(list(map(_POSITION_OF, ports)), var_count).tolist()
+    order = np.repeat(list(map(_ORDER_OF, ports)), var_count).tolist()
+    flat.folded = FoldedColumns(names, units, docs, position, order, ptr, rows)
 
-    def place(port):
-        """The row of ``port``'s first variable, and its class's offsets of keys."""
-        at = offsets.get(type(port))
-        if at is None:
-            at = offsets[type(port)] = _binding_plan(type(port))[4]
-        row = _first_row(port, late)
-        if row < 0:     # every member of a folded node is bound by now
-            raise AssertionError(f"port '{port.path}' of a folded node has no variables")
-        return row, at
 
-    names: list = []
-    units: list = []
-    docs: list = []
-    position: list = []
-    order: list = []
-    terms: list = []
-    for pid, port in folded.items():
-        cls = type(port)
-        plan = plans.get(cls)
-        if plan is None:
-            keys, port_units, port_docs = _folded_plan(cls)
-            kinds = [(key, kind == "across") for key, kind, *_ in _declaration_plan(cls)[1]]
-            plan = plans[cls] = (keys, port_units, port_docs, kinds)
-        keys, port_units, port_docs, kinds = plan
-        b0, o0 = place(node[pid].port)
-        inside = [place(m.port) for m in flow[pid]]
-        terms += [[b0 + o0[key]] if across else [b + o[key] for b, o in inside]
-                  for key, across in kinds]
-        prefix = port.path + "."
-        names += [prefix + k for k in keys]
-        units += port_units
-        docs += port_docs
-        syms = port._syms
-        position += [syms.position] * len(keys)
-        order += [syms.order] * len(keys)
-    flat.folded = FoldedColumns(names, units, docs, position, order, terms)
+_ROW_OF = attrgetter("_syms.row")       # an element's first row, when bound in bulk
+_POSITION_OF = attrgetter("_syms.position")  # where a folded port's variables go
+_ORDER_OF = attrgetter("_syms.order")
+_PATH_OF = attrgetter("_path_cache")    # set by _walk
+
+
+def _rows_of(ports: list, late: dict) -> np.ndarray:
+    """`_first_row` of each of ``ports``: one map over them when every one was bound in
+    bulk, else port by port; a port without variables is an error of flattening."""
+    try:
+        rows = np.fromiter(map(_ROW_OF, ports), dtype=np.intp, count=len(ports))
+    except AttributeError:      # a port bound on first read (its rows are in ``late``)
+        rows = np.array([_first_row(p, late) for p in ports], dtype=np.intp)
+    if rows.size and rows.min() < 0:     # every member of a folded node is bound by now
+        bad = ports[int(np.argmin(rows))]
+        raise AssertionError(f"port '{bad.path}' of a folded node has no variables")
+    return rows
 
 
 @functools.lru_cache(maxsize=None)

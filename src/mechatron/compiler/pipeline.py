@@ -5,7 +5,6 @@ from __future__ import annotations
 import gc
 import time as _time
 from collections.abc import Mapping
-from itertools import chain
 
 import casadi as ca
 import numpy as np
@@ -132,8 +131,8 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         out[at] = extra
         out[~is_folded] = mine
         merged.append(out.tolist())
-    t_row = np.repeat(np.arange(n_f), [len(rows) for rows in f_terms])
-    t_var = np.fromiter(chain.from_iterable(f_terms), dtype=np.intp, count=t_row.size)
+    t_ptr, t_var = f_terms
+    t_row = np.repeat(np.arange(n_f), np.diff(t_ptr))
     t_coef = scale[t_var]
     t_rep = rep[t_var]
     gone = t_rep < 0
