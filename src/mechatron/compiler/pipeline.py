@@ -16,6 +16,7 @@ from mechatron.compiler.events import Lowering as EventLowering
 from mechatron.compiler.events import (bind_pre, clock_distances, direct_relations,
                                         prepare_events, replace_pre)
 from mechatron.compiler.flatten import ColumnRows, flatten, stack_columns
+from mechatron.compiler.heap import kept_heap
 from mechatron.compiler.relations import extract_relations
 from mechatron.compiler.structure import lower
 from mechatron.core.component import Component
@@ -37,11 +38,15 @@ def compile_model(model: Component, *, name: str | None = None,
     passes keep (tests/compiler/test_pipeline.py): what a compile drops is freed by
     reference counts as it goes, while a cycle would hold its memory to the end and
     leave the collector's first pass after the compile to visit all of it.
+
+    glibc keeps the memory the compile frees for the compile's own later use, and hands
+    it back when the compile is done (:mod:`mechatron.compiler.heap`).
     """
     enabled = gc.isenabled()
     gc.disable()
     try:
-        return _compile(model, name, check_dimensions)
+        with kept_heap():
+            return _compile(model, name, check_dimensions)
     finally:
         if enabled:
             gc.enable()
