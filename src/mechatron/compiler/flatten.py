@@ -2295,65 +2295,19 @@ class _Joined:
 
 def _folded_variables(flat: FlatModel, folded, folding) -> None:
     """Record the variables of the folded ports, for logging them (`FlatModel.folded`, a
-    `FoldedColumns`): the rows of the variables each one sums, read off the rows of the
-    member ports (each member's own class places the key). The rows and classes of all
-    the ports are read by maps over them, and the terms formed by array operations per
-    class of folded port; Python runs per port only to gather each one's members."""
-    node, flow, late = folding.node, folding.flow, flat.__dict__.get("_rows", {})
-    pids = list(folded)
+    `FoldedColumns`): each one's name, unit, doc and place, and the rows of the model
+    variables it sums (`_folded_terms`). Python runs per port only to gather each one's
+    node and members; the rest are maps over the ports and array operations."""
+    node, flow = folding.node, folding.flow
     ports = list(folded.values())
-    firsts = [node[pid].port for pid in pids]
-    insides = [flow[pid] for pid in pids]
-    n_in = np.fromiter(map(len, insides), dtype=np.intp, count=len(pids))
-    inner = [m.port for members in insides for m in members]
-    b_first, b_inner = _rows_of(firsts, late), _rows_of(inner, late)
-    # the classes met, numbered, and the place of each key among each one's variables
     types = list(map(type, ports))
+    # each class of folded port: its variables' keys, an across variable or not
     kinds = {cls: [(key, kind == "across") for key, kind, *_ in _declaration_plan(cls)[1]]
              for cls in dict.fromkeys(types)}
-    number = {cls: k for k, cls in enumerate(dict.fromkeys([*types, *map(type, firsts),
-                                                            *map(type, inner)]))}
-    key_of = {key: j for j, key in enumerate(dict.fromkeys(
-        key for plan in kinds.values() for key, _ in plan))}
-    place = np.full((len(number), len(key_of)), -1, dtype=np.intp)
-    for cls, k in number.items():
-        for key, at in _binding_plan(cls)[4].items():
-            if key in key_of:
-                place[k, key_of[key]] = at
-    c_port = np.fromiter(map(number.__getitem__, types), dtype=np.intp, count=len(types))
-    c_first = np.fromiter(map(number.__getitem__, map(type, firsts)), dtype=np.intp,
-                          count=len(firsts))
-    c_inner = np.fromiter(map(number.__getitem__, map(type, inner)), dtype=np.intp,
-                          count=len(inner))
-    # each port's variables: where they start, and how many terms each one has
-    per_class = np.zeros(len(number), dtype=np.intp)
-    for cls, plan in kinds.items():
-        per_class[number[cls]] = len(plan)
-    var_count = per_class[c_port]
-    var_start = np.cumsum(var_count) - var_count
-    counts = np.zeros(int(var_count.sum()), dtype=np.intp)
-    for cls, plan in kinds.items():
-        mine = np.flatnonzero(c_port == number[cls])
-        for j, (_, across) in enumerate(plan):
-            counts[var_start[mine] + j] = 1 if across else n_in[mine]
-    ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
-    rows = np.empty(ptr[-1], dtype=np.intp)
-    in_ptr = np.concatenate([[0], np.cumsum(n_in)]).astype(np.intp)
-    for cls, plan in kinds.items():
-        mine = np.flatnonzero(c_port == number[cls])
-        members, owner = _segments(in_ptr, mine)
-        for j, (key, across) in enumerate(plan):
-            k = key_of[key]
-            if across:      # the node's first member's
-                at, base, offset = ptr[var_start[mine] + j], b_first[mine], \
-                    place[c_first[mine], k]
-            else:           # the inside members' of its set
-                at = ptr[var_start[mine[owner]] + j] + (members - in_ptr[mine[owner]])
-                base, offset = b_inner[members], place[c_inner[members], k]
-            if offset.size and offset.min() < 0:
-                raise AssertionError(f"a member of the node of a folded {cls.__name__} "
-                                     f"has no variable {key}")
-            rows[at] = base + offset
+    firsts = [node[pid].port for pid in folded]
+    insides = [[m.port for m in flow[pid]] for pid in folded]
+    ptr, rows, var_count = _folded_terms(types, kinds, firsts, insides,
+                                         flat.__dict__.get("_rows", {}))
     suffixes = {cls: ["." + key for key, _ in plan] for cls, plan in kinds.items()}
     names = [path + sfx for path, sfxs in zip(map(_PATH_OF, ports),
                                              map(suffixes.__getitem__, types))
@@ -2365,6 +2319,66 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     position = np.repeat(list(map(_POSITION_OF, ports)), var_count).tolist()
     order = np.repeat(list(map(_ORDER_OF, ports)), var_count).tolist()
     flat.folded = FoldedColumns(names, units, docs, position, order, ptr, rows)
+
+
+def _folded_terms(types: list, kinds: dict, firsts: list, insides: list[list],
+                  late: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The terms of the folded ports' variables as compressed rows ``(ptr, rows)``, and
+    how many variables each port has. Port ``i`` (of class ``types[i]``, its keys in
+    ``kinds``) has each variable in declaration order; an across variable's term is the
+    row of that key of the node's first member ``firsts[i]``, a through variable's those
+    of the inside members ``insides[i]``. A member's row is its first variable's plus the
+    key's place among its own class's variables (a subclass may place it elsewhere)."""
+    n_in = np.fromiter(map(len, insides), dtype=np.intp, count=len(insides))
+    inner = list(chain.from_iterable(insides))
+    b_first, b_inner = _rows_of(firsts, late), _rows_of(inner, late)
+    # every class met, numbered, and the place of each key among its variables
+    number = {cls: k for k, cls in enumerate(dict.fromkeys([*types, *map(type, firsts),
+                                                            *map(type, inner)]))}
+    key_of = {key: j for j, key in enumerate(dict.fromkeys(
+        key for plan in kinds.values() for key, _ in plan))}
+    place = np.full((len(number), len(key_of)), -1, dtype=np.intp)
+    for cls, k in number.items():
+        for key, at in _binding_plan(cls)[4].items():
+            if key in key_of:
+                place[k, key_of[key]] = at
+
+    def classes(items) -> np.ndarray:
+        return np.fromiter(map(number.__getitem__, map(type, items)), dtype=np.intp,
+                           count=len(items))
+
+    c_first, c_inner = classes(firsts), classes(inner)
+    c_port = np.fromiter(map(number.__getitem__, types), dtype=np.intp, count=len(types))
+    per_class = np.zeros(len(number), dtype=np.intp)
+    for cls, plan in kinds.items():
+        per_class[number[cls]] = len(plan)
+    var_count = per_class[c_port]
+    var_start = np.cumsum(var_count) - var_count       # each port's first variable
+    in_ptr = np.concatenate([[0], np.cumsum(n_in)]).astype(np.intp)
+    mine = {cls: np.flatnonzero(c_port == number[cls]) for cls in kinds}
+    # how many terms each variable has: one across, a term per inside member through
+    counts = np.zeros(int(var_count.sum()), dtype=np.intp)
+    for cls, plan in kinds.items():
+        for j, (_, across) in enumerate(plan):
+            counts[var_start[mine[cls]] + j] = 1 if across else n_in[mine[cls]]
+    ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+    rows = np.empty(ptr[-1], dtype=np.intp)
+    for cls, plan in kinds.items():
+        ports = mine[cls]
+        members, owner = _segments(in_ptr, ports)
+        for j, (key, across) in enumerate(plan):
+            k = key_of[key]
+            if across:
+                at = ptr[var_start[ports] + j]
+                base, offset = b_first[ports], place[c_first[ports], k]
+            else:
+                at = ptr[var_start[ports[owner]] + j] + (members - in_ptr[ports[owner]])
+                base, offset = b_inner[members], place[c_inner[members], k]
+            if offset.size and offset.min() < 0:
+                raise AssertionError(f"a member of the node of a folded {cls.__name__} "
+                                     f"has no variable {key}")
+            rows[at] = base + offset
+    return ptr, rows, var_count
 
 
 _ROW_OF = attrgetter("_syms.row")       # an element's first row, when bound in bulk
