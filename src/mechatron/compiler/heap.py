@@ -11,11 +11,10 @@ a fault of the kernel's on first touch. `kept_heap` turns both off for the lengt
 a compile (no mapping of its own for any block, no trimming), hands the memory the
 compile freed back afterwards when more than the trim threshold below is free
 (``malloc_trim``: a small compile's few megabytes stay for the next), and leaves the
-thresholds where
-glibc's dynamic rule settles once a process has freed a block of 32 MiB: mappings for
-blocks from 32 MiB, trimming above 64 MiB free. (Setting any threshold ends the dynamic
-rule for the process; a process that compiles a large model reaches these values under
-it anyway.)
+thresholds where glibc's dynamic rule settles once a process has freed a block of
+32 MiB: mappings for blocks from 32 MiB, trimming above 64 MiB free. (Setting any
+threshold ends the dynamic rule for the process; a process that compiles a large model
+reaches these values under it anyway.)
 
 Nothing is changed when the C library is not glibc, when ``GLIBC_TUNABLES`` or the
 ``MALLOC_*_`` variables already tune malloc (the user's choice stands), or when
