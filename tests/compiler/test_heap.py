@@ -6,7 +6,6 @@ import pytest
 
 import mechatron as mt
 from mechatron.compiler import heap, pipeline
-from mechatron.library import electrical as el
 
 lib = heap._glibc()
 pytestmark = pytest.mark.skipif(lib is None, reason="glibc's malloc with its defaults only")
@@ -80,13 +79,5 @@ def test_compile_model_runs_inside_the_block(monkeypatch):
         return compile_(*args, **kwargs)
 
     monkeypatch.setattr(pipeline, "_compile", spy)
-    m = mt.System("rc")
-    src = m.add("src", el.DCVoltageSource(V=1.0))
-    r = m.add("r", el.Resistor(R=1.0))
-    c = m.add("c", el.Capacitor(C=1.0))
-    gnd = m.add("gnd", el.ElectricalReference())
-    m.connect(src.p, r.p)
-    m.connect(r.n, c.p)
-    m.connect(c.n, src.n, gnd.port)
-    mt.compile_model(m)
+    mt.compile_model(mt.models.get("dc_motor").build())
     assert depth == [1] and heap._depth == 0
