@@ -68,8 +68,8 @@ def test_a_ladder_lowers_the_same_through_the_sampled_pattern(monkeypatch):
     taken = []
     pattern = st._pattern
 
-    def spy(expr, syms):
-        out = pattern(expr, syms)
+    def spy(expr, syms, narrow=None):
+        out = pattern(expr, syms, narrow)
         taken.append(out[1] is not None)
         return out
 
@@ -88,6 +88,41 @@ def test_a_ladder_lowers_the_same_through_the_sampled_pattern(monkeypatch):
                                   np.asarray(plain.f_ode(*args)))
     np.testing.assert_array_equal(np.asarray(sampled.f_out(*args)),
                                   np.asarray(plain.f_out(*args)))
+
+
+def test_rows_known_to_be_narrow_are_left_out_of_the_probe_and_the_pattern_stays(
+        monkeypatch):
+    """The mask only spares the probe rows: the pattern is CasADi's whether it is right
+    (the dense rows left in) or wrong (every row said narrow, the dense ones too)."""
+    expr, x = _rows(3000)
+    counts = np.diff(np.asarray(ca.jacobian_sparsity(expr, x).get_crs()[0]))
+    monkeypatch.setattr(st, "_SAMPLED_PATTERN_ROWS", 1)
+    right = counts < st._DENSE_ROW
+    assert 0 < (~right).sum() < 5
+    for narrow, found in ((right, True), (np.ones(counts.size, dtype=bool), False)):
+        pattern, jac = st._pattern(expr, x, narrow)
+        assert (jac is not None) == found
+        assert pattern == ca.jacobian_sparsity(expr, x)
+
+
+def test_the_rows_of_class_templates_are_told_narrow_by_their_origins(monkeypatch):
+    """In a ladder, the rows of the resistors', capacitors' and source's templates are
+    narrow; the flow sums (the reference node's among them) are not told."""
+    seen = []
+    csr = st._csr
+
+    def spy(expr, syms, narrow=None):
+        seen.append((expr, syms, narrow))
+        return csr(expr, syms, narrow)
+
+    monkeypatch.setattr(st, "_csr", spy)
+    mt.compile_model(ladder(200))
+    (expr, syms, narrow), = seen
+    counts = np.diff(np.asarray(ca.jacobian_sparsity(expr, syms).get_crs()[0]))
+    assert narrow is not None and narrow.size == counts.size
+    assert narrow.sum() >= 0.6 * counts.size       # most rows come from templates
+    assert (counts[narrow] < st._DENSE_ROW).all()
+    assert not narrow[np.argmax(counts)]           # the reference node's flow sum
 
 
 def test_the_entries_of_a_sub_block_are_casadis():

@@ -20,8 +20,8 @@ import numpy as np
 from mechatron.compiler.flatten import ColumnRows, Origins, stack_columns
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
-from mechatron.compiler.linear import (Combined, jacobian_apart, owner_of, reveal,
-                                       sparse_jacobian)
+from mechatron.compiler.linear import (_DENSE_ROW, Combined, jacobian_apart, owner_of,
+                                       reveal, sparse_jacobian)
 from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
 
@@ -54,7 +54,8 @@ _SAMPLED_PATTERN_ROWS = 250_000   # from this many equations on, see _pattern
 _PROBE_COLUMNS = 1024             # columns sampled to find the dense rows (_pattern)
 
 
-def _pattern(expr: ca.SX, syms: ca.SX) -> tuple[ca.Sparsity, ca.SX | None]:
+def _pattern(expr: ca.SX, syms: ca.SX, narrow: np.ndarray | None = None
+             ) -> tuple[ca.Sparsity, ca.SX | None]:
     """``jacobian_sparsity(expr, syms)``, with the rows that hold many variables
     found first and swept apart from the others when there are many rows; and the
     Jacobian itself when it was formed on the way (else None).
@@ -66,28 +67,58 @@ def _pattern(expr: ca.SX, syms: ca.SX) -> tuple[ca.Sparsity, ca.SX | None]:
     seed, not evenly spaced: a model's columns repeat with the period of its
     components, which a stride can miss entirely. A row with 8 of them there holds
     hundreds of variables of a small model, thousands of a large one (rows of a few
-    thousand cost little). The pattern is the same either way. Each part is then
-    differentiated at once, and the pattern read off its Jacobian: ``casadi.jacobian``
-    forms the same pattern inside, and on such a graph every sweep costs
-    (`mechatron.compiler.linear.reveal` takes the Jacobian)."""
+    thousand cost little). Rows known to hold few variables (``narrow``, a mask: see
+    `_narrow_rows`) are left out of the sample's sweep. The pattern is the same either
+    way. Each part is then differentiated at once, and the pattern read off its
+    Jacobian: ``casadi.jacobian`` forms the same pattern inside, and on such a graph
+    every sweep costs (`mechatron.compiler.linear.reveal` takes the Jacobian)."""
     if expr.numel() < _SAMPLED_PATTERN_ROWS:
         return ca.jacobian_sparsity(expr, syms), None
     n_col = syms.numel()
-    picked = np.random.default_rng(0).choice(
-        n_col, min(_PROBE_COLUMNS, max(n_col // 64, 1)), replace=False)
-    probe = ca.jacobian_sparsity(expr, syms[np.sort(picked).tolist()])
+    picked = np.sort(np.random.default_rng(0).choice(
+        n_col, min(_PROBE_COLUMNS, max(n_col // 64, 1)), replace=False)).tolist()
+    if narrow is None:
+        rows = None
+        probe = ca.jacobian_sparsity(expr, syms[picked])
+    else:
+        rows = np.flatnonzero(~narrow)
+        probe = ca.jacobian_sparsity(expr[rows.tolist()], syms[picked]) if rows.size \
+            else ca.Sparsity(0, len(picked))
     count = np.diff(np.asarray(probe.get_crs()[0], dtype=np.int64))
     dense = np.flatnonzero(count >= 8)
+    if rows is not None:
+        dense = rows[dense]
     if dense.size == 0:
         return ca.jacobian_sparsity(expr, syms), None
     jac = jacobian_apart(expr, syms, dense)
     return jac.sparsity(), jac
 
 
-def _csr(expr: ca.SX, syms: ca.SX) -> tuple[list[list[int]], ca.Sparsity, ca.SX | None]:
+def _narrow_rows(origins, n_rows: int) -> np.ndarray | None:
+    """Which of ``n_rows`` residuals hold fewer than `_DENSE_ROW` variables for certain,
+    read off their origins (`Origins`) without a sweep: a row of a class template's
+    equation holds at most as many variables as the template has symbols (its
+    instance's variables, their derivatives, parameters and time; aliases replaced by
+    one variable or a number each), unless the row was replaced since (its origin then
+    held as given). None when ``origins`` are no such record of these rows."""
+    if not isinstance(origins, Origins) or origins.formed is not None \
+            or len(origins) != n_rows or len(origins.which) != n_rows:
+        return None
+    narrow = np.zeros(n_rows, dtype=bool)
+    if origins.templates:
+        small = np.array([t.svec.numel() < _DENSE_ROW for t in origins.templates])
+        at = np.flatnonzero(origins.which >= 0)
+        narrow[at] = small[origins.which[at]]
+        if origins.given:
+            narrow[list(origins.given)] = False
+    return narrow
+
+
+def _csr(expr: ca.SX, syms: ca.SX, narrow: np.ndarray | None = None
+         ) -> tuple[list[list[int]], ca.Sparsity, ca.SX | None]:
     """The incidence of ``expr`` in ``syms`` as rows of column indices, the sparsity of
     the Jacobian it comes from, and that Jacobian if it was formed (see `_pattern`)."""
-    sp, jac = _pattern(expr, syms)
+    sp, jac = _pattern(expr, syms, narrow)
     ptr, col = sp.get_crs()
     return [col[a:b] for a, b in zip(ptr, ptr[1:])], sp, jac
 
@@ -213,7 +244,8 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     if res:
         res_vec, var_vec = stacked if stacked is not None else (ca.vertcat(*res),
                                                                 ca.vertcat(*var_syms))
-    adj, pattern, jac = _csr(res_vec, var_vec) if res else ([], None, None)
+    adj, pattern, jac = _csr(res_vec, var_vec, _narrow_rows(origins, len(res))) \
+        if res else ([], None, None)
     # derivative symbols that appear nowhere do not make their variable a state
     used = set(chain.from_iterable(adj))
     for i, d in enumerate(var_to_diff):
