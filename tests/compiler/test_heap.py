@@ -6,6 +6,8 @@ import pytest
 
 import mechatron as mt
 from mechatron.compiler import heap, pipeline
+from mechatron.errors import ModelError
+from mechatron.library import electrical as el
 
 lib = heap._glibc()
 pytestmark = pytest.mark.skipif(lib is None, reason="glibc's malloc with its defaults only")
@@ -81,3 +83,14 @@ def test_compile_model_runs_inside_the_block(monkeypatch):
     monkeypatch.setattr(pipeline, "_compile", spy)
     mt.compile_model(mt.models.get("dc_motor").build())
     assert depth == [1] and heap._depth == 0
+
+
+def test_a_compile_that_fails_leaves_malloc_as_a_finished_one():
+    m = mt.System("loose")
+    m.add("r", el.Resistor(R=1.0))              # its pins connected to nothing
+    with pytest.raises(ModelError, match="is not connected"):
+        mt.compile_model(m)
+    assert heap._depth == 0
+    a = np.ones(BIG // 8)
+    assert mapped() >= BIG, "large blocks are mappings of their own again"
+    del a
