@@ -374,6 +374,11 @@ class FoldedColumns:
         return list(dict.fromkeys(name.rpartition(".")[0] for name in self.names))
 
 
+def _offsets(counts: np.ndarray) -> np.ndarray:
+    """Compressed-row pointers (as a CSR matrix's) of segments of ``counts`` entries."""
+    return np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+
+
 def _segments(ptr: np.ndarray, take: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For the segments ``take`` of compressed rows ``ptr`` (as a CSR matrix's), in that
     order: the place of each of their entries among all entries, and the index into
@@ -676,8 +681,7 @@ class FlatModel:
         if np.any(position[1:] < position[:-1]):    # (tree order keeps them sorted)
             k = np.argsort(position, kind="stable")
             at, _ = _segments(f.term_ptr, k)
-            counts = np.diff(f.term_ptr)[k]
-            ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+            ptr = _offsets(np.diff(f.term_ptr)[k])
             k_list = k.tolist()
             return ([f.names[i] for i in k_list], [f.units[i] for i in k_list],
                     [f.docs[i] for i in k_list], position[k], (ptr, f.term_rows[at]))
@@ -1283,10 +1287,11 @@ class _FoldedSymbols(dict):
 
 @functools.lru_cache(maxsize=None)
 def _folded_plan(cls) -> tuple:
-    """The keys, units and docs of a connector class's variables (once per class)."""
+    """The keys, units and docs of a connector class's variables, and whether each is an
+    across variable (once per class)."""
     plain = _declaration_plan(cls)[1]
-    units, docs = tuple(e[2] for e in plain), tuple(e[3] for e in plain)
-    return tuple(e[0] for e in plain), units, docs
+    return tuple(tuple(e[k] for e in plain) for k in (0, 2, 3)) + \
+        (tuple(e[1] == "across" for e in plain),)
 
 
 @functools.lru_cache(maxsize=None)
@@ -2301,31 +2306,28 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     node, flow = folding.node, folding.flow
     ports = list(folded.values())
     types = list(map(type, ports))
-    # each class of folded port: its variables' keys, an across variable or not
-    kinds = {cls: [(key, kind == "across") for key, kind, *_ in _declaration_plan(cls)[1]]
-             for cls in dict.fromkeys(types)}
+    plans = {cls: _folded_plan(cls) for cls in dict.fromkeys(types)}
     firsts = [node[pid].port for pid in folded]
     insides = [[m.port for m in flow[pid]] for pid in folded]
-    ptr, rows, var_count = _folded_terms(types, kinds, firsts, insides,
+    ptr, rows, var_count = _folded_terms(types, plans, firsts, insides,
                                          flat.__dict__.get("_rows", {}))
-    suffixes = {cls: ["." + key for key, _ in plan] for cls, plan in kinds.items()}
+    suffixes = {cls: ["." + key for key in plan[0]] for cls, plan in plans.items()}
     names = [path + sfx for path, sfxs in zip(map(_PATH_OF, ports),
                                              map(suffixes.__getitem__, types))
              for sfx in sfxs]
-    units = list(chain.from_iterable(map({cls: _folded_plan(cls)[1] for cls in kinds}
-                                         .__getitem__, types)))
-    docs = list(chain.from_iterable(map({cls: _folded_plan(cls)[2] for cls in kinds}
-                                        .__getitem__, types)))
+    units, docs = (list(chain.from_iterable(map({cls: plan[k] for cls, plan in plans.items()}
+                                                .__getitem__, types))) for k in (1, 2))
     position = np.repeat(list(map(_POSITION_OF, ports)), var_count).tolist()
     order = np.repeat(list(map(_ORDER_OF, ports)), var_count).tolist()
     flat.folded = FoldedColumns(names, units, docs, position, order, ptr, rows)
 
 
-def _folded_terms(types: list, kinds: dict, firsts: list, insides: list[list],
+def _folded_terms(types: list, plans: dict, firsts: list, insides: list[list],
                   late: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The terms of the folded ports' variables as compressed rows ``(ptr, rows)``, and
-    how many variables each port has. Port ``i`` (of class ``types[i]``, its keys in
-    ``kinds``) has each variable in declaration order; an across variable's term is the
+    how many variables each port has. Port ``i`` (of class ``types[i]``, its keys and
+    which are across in ``plans``, see `_folded_plan`) has each variable in declaration
+    order; an across variable's term is the
     row of that key of the node's first member ``firsts[i]``, a through variable's those
     of the inside members ``insides[i]``. A member's row is its first variable's plus the
     key's place among its own class's variables (a subclass may place it elsewhere)."""
@@ -2336,37 +2338,37 @@ def _folded_terms(types: list, kinds: dict, firsts: list, insides: list[list],
     number = {cls: k for k, cls in enumerate(dict.fromkeys([*types, *map(type, firsts),
                                                             *map(type, inner)]))}
     key_of = {key: j for j, key in enumerate(dict.fromkeys(
-        key for plan in kinds.values() for key, _ in plan))}
+        key for plan in plans.values() for key in plan[0]))}
     place = np.full((len(number), len(key_of)), -1, dtype=np.intp)
     for cls, k in number.items():
         for key, at in _binding_plan(cls)[4].items():
             if key in key_of:
                 place[k, key_of[key]] = at
 
-    def classes(items) -> np.ndarray:
-        return np.fromiter(map(number.__getitem__, map(type, items)), dtype=np.intp,
-                           count=len(items))
+    def numbered(classes: list) -> np.ndarray:
+        return np.fromiter(map(number.__getitem__, classes), dtype=np.intp,
+                           count=len(classes))
 
-    c_first, c_inner = classes(firsts), classes(inner)
-    c_port = np.fromiter(map(number.__getitem__, types), dtype=np.intp, count=len(types))
+    c_port = numbered(types)
+    c_first, c_inner = numbered(list(map(type, firsts))), numbered(list(map(type, inner)))
     per_class = np.zeros(len(number), dtype=np.intp)
-    for cls, plan in kinds.items():
-        per_class[number[cls]] = len(plan)
+    for cls, plan in plans.items():
+        per_class[number[cls]] = len(plan[0])
     var_count = per_class[c_port]
     var_start = np.cumsum(var_count) - var_count       # each port's first variable
-    in_ptr = np.concatenate([[0], np.cumsum(n_in)]).astype(np.intp)
-    mine = {cls: np.flatnonzero(c_port == number[cls]) for cls in kinds}
+    in_ptr = _offsets(n_in)
+    mine = {cls: np.flatnonzero(c_port == number[cls]) for cls in plans}
     # how many terms each variable has: one across, a term per inside member through
     counts = np.zeros(int(var_count.sum()), dtype=np.intp)
-    for cls, plan in kinds.items():
-        for j, (_, across) in enumerate(plan):
-            counts[var_start[mine[cls]] + j] = 1 if across else n_in[mine[cls]]
-    ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+    for cls, (_, _, _, across) in plans.items():
+        for j, is_across in enumerate(across):
+            counts[var_start[mine[cls]] + j] = 1 if is_across else n_in[mine[cls]]
+    ptr = _offsets(counts)
     rows = np.empty(ptr[-1], dtype=np.intp)
-    for cls, plan in kinds.items():
+    for cls, (keys, _, _, across_of) in plans.items():
         ports = mine[cls]
         members, owner = _segments(in_ptr, ports)
-        for j, (key, across) in enumerate(plan):
+        for j, (key, across) in enumerate(zip(keys, across_of)):
             k = key_of[key]
             if across:
                 at = ptr[var_start[ports] + j]

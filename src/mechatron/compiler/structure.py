@@ -74,20 +74,18 @@ def _pattern(expr: ca.SX, syms: ca.SX, narrow: np.ndarray | None = None
     every sweep costs (`mechatron.compiler.linear.reveal` takes the Jacobian)."""
     if expr.numel() < _SAMPLED_PATTERN_ROWS:
         return ca.jacobian_sparsity(expr, syms), None
-    n_col = syms.numel()
-    picked = np.sort(np.random.default_rng(0).choice(
-        n_col, min(_PROBE_COLUMNS, max(n_col // 64, 1)), replace=False)).tolist()
-    if narrow is None:
-        rows = None
-        probe = ca.jacobian_sparsity(expr, syms[picked])
-    else:
-        rows = np.flatnonzero(~narrow)
-        probe = ca.jacobian_sparsity(expr[rows.tolist()], syms[picked]) if rows.size \
-            else ca.Sparsity(0, len(picked))
-    count = np.diff(np.asarray(probe.get_crs()[0], dtype=np.int64))
-    dense = np.flatnonzero(count >= 8)
-    if rows is not None:
-        dense = rows[dense]
+    rows = None if narrow is None else np.flatnonzero(~narrow)   # the rows to probe
+    dense = np.zeros(0, dtype=np.int64)
+    if rows is None or rows.size:
+        n_col = syms.numel()
+        picked = np.sort(np.random.default_rng(0).choice(
+            n_col, min(_PROBE_COLUMNS, max(n_col // 64, 1)), replace=False)).tolist()
+        probe = ca.jacobian_sparsity(expr if rows is None else expr[rows.tolist()],
+                                     syms[picked])
+        count = np.diff(np.asarray(probe.get_crs()[0], dtype=np.int64))
+        dense = np.flatnonzero(count >= 8)
+        if rows is not None:
+            dense = rows[dense]
     if dense.size == 0:
         return ca.jacobian_sparsity(expr, syms), None
     jac = jacobian_apart(expr, syms, dense)
