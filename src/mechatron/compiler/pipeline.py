@@ -97,8 +97,9 @@ def _read_through(column: ca.SX, rep: np.ndarray, scale: np.ndarray,
 def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     """Every logged variable: names, units, docs, and the column of their expressions in
     the unknowns, formed in bulk (no CasADi call per variable): the model's variables by
-    `_read_through`, the variables of folded ports (sums) as one sparse matrix times the
-    model's stacked variable symbols plus constants, put in place between them. Each is
+    `_read_through`, the variables of folded ports put in place between them: those of
+    one term by `_read_through` too, the longer sums as one sparse matrix times the
+    model's stacked variable symbols plus constants. Each is
     a sum of model variables read through alias elimination (a variable removed by it is
     a scaled representative or a constant): a model variable the sum of itself, a
     variable of a folded subsystem port (:mod:`mechatron.compiler.folding`) that of its
@@ -125,8 +126,8 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     kept = rep >= 0
     if not n_f:
         return names, units, docs, _read_through(flat.stack_variables(), rep, scale, kept)
-    # the folded variables' rows among the model's, then their terms in bulk: one sparse
-    # product for those rows alone, the model's variables put in place around them
+    # the folded variables' rows among the model's, the model's variables put in place
+    # around them, then the folded ones' terms in bulk
     at = np.minimum(position, n) + np.arange(n_f)
     is_folded = np.zeros(n + n_f, dtype=bool)
     is_folded[at] = True
@@ -136,27 +137,39 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         out[at] = extra
         out[~is_folded] = mine
         merged.append(out.tolist())
-    t_ptr, t_var = f_terms
-    t_row = np.repeat(np.arange(n_f), np.diff(t_ptr))
-    t_coef = scale[t_var]
-    t_rep = rep[t_var]
-    gone = t_rep < 0
-    constant = np.zeros(n_f)
-    np.add.at(constant, t_row[gone], t_coef[gone])
-    # the terms of one representative add up (a triplet keeps one entry per place)
-    key = t_row[~gone].astype(np.int64) * max(n, 1) + t_rep[~gone]
-    uniq, inverse = np.unique(key, return_inverse=True)
-    sums = np.bincount(inverse, weights=t_coef[~gone], minlength=uniq.size)
-    M = ca.DM.triplet((uniq // max(n, 1)).tolist(), (uniq % max(n, 1)).tolist(),
-                      ca.DM(sums.tolist()), n_f, n)
-    terms = ca.mtimes(M, flat.stack_variables())
-    nonzero = np.flatnonzero(constant)
-    if len(nonzero):         # the constants where there are any (a sparse column)
-        terms = terms + ca.DM.triplet(nonzero.tolist(), [0] * len(nonzero),
-                                      ca.DM(constant[nonzero].tolist()), n_f, 1)
     column = ca.SX.zeros(n + n_f)
-    _read_through(flat.stack_variables(), rep, scale, kept, column, var_row)
-    column.nz[at.tolist()] = ca.densify(terms)
+    x = flat.stack_variables()
+    _read_through(x, rep, scale, kept, column, var_row)
+    t_ptr, t_var = f_terms
+    count = np.diff(t_ptr)
+    # a sum of one term (an across variable, a port with one member inside) is that
+    # model variable read through as the model's are; only the longer sums need the
+    # sparse product (the rows with no term stay 0)
+    single = np.flatnonzero(count == 1)
+    if single.size:
+        v = t_var[t_ptr[single]]
+        _read_through(x, rep[v], scale[v], kept[v], column, at[single])
+    many = np.flatnonzero(count > 1)
+    if many.size:
+        t_row = np.repeat(np.arange(many.size), count[many])
+        t_var = t_var[np.repeat(count > 1, count)]     # their terms, row after row
+        t_coef = scale[t_var]
+        t_rep = rep[t_var]
+        gone = t_rep < 0
+        constant = np.zeros(many.size)
+        np.add.at(constant, t_row[gone], t_coef[gone])
+        # the terms of one representative add up (a triplet keeps one entry per place)
+        key = t_row[~gone].astype(np.int64) * max(n, 1) + t_rep[~gone]
+        uniq, inverse = np.unique(key, return_inverse=True)
+        sums = np.bincount(inverse, weights=t_coef[~gone], minlength=uniq.size)
+        M = ca.DM.triplet((uniq // max(n, 1)).tolist(), (uniq % max(n, 1)).tolist(),
+                          ca.DM(sums.tolist()), many.size, n)
+        terms = ca.mtimes(M, x)
+        nonzero = np.flatnonzero(constant)
+        if len(nonzero):         # the constants where there are any (a sparse column)
+            terms = terms + ca.DM.triplet(nonzero.tolist(), [0] * len(nonzero),
+                                          ca.DM(constant[nonzero].tolist()), many.size, 1)
+        column.nz[at[many].tolist()] = ca.densify(terms)
     return (*merged, column)
 
 
