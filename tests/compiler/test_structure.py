@@ -12,7 +12,7 @@ from tests.compiler.test_flatten_templates import ladder
 
 def _rows(n):
     """``n`` sparse rows (each in three variables, one nonlinear), a row of 100 variables
-    (sparse to the probe, more than `_DENSE_ROW` to `sparse_jacobian`) and a row in all
+    (sparse to the probe, more than `DENSE_ROW` to `sparse_jacobian`) and a row in all
     of them, in a scrambled order."""
     x = ca.SX.sym("x", n)
     rows = [x[i] * x[(i + 1) % n] - ca.sin(x[(i + 7) % n]) for i in range(n)]
@@ -97,7 +97,7 @@ def test_rows_known_to_be_narrow_are_left_out_of_the_probe_and_the_pattern_stays
     expr, x = _rows(3000)
     counts = np.diff(np.asarray(ca.jacobian_sparsity(expr, x).get_crs()[0]))
     monkeypatch.setattr(st, "_SAMPLED_PATTERN_ROWS", 1)
-    right = counts < st._DENSE_ROW
+    right = counts < st.DENSE_ROW
     assert 0 < (~right).sum() < 5
     for narrow, found in ((right, True), (np.ones(counts.size, dtype=bool), False)):
         pattern, jac = st._pattern(expr, x, narrow)
@@ -121,7 +121,7 @@ def test_the_rows_of_class_templates_are_told_narrow_by_their_origins(monkeypatc
     counts = np.diff(np.asarray(ca.jacobian_sparsity(expr, syms).get_crs()[0]))
     assert narrow is not None and narrow.size == counts.size
     assert narrow.sum() >= 0.6 * counts.size       # most rows come from templates
-    assert (counts[narrow] < st._DENSE_ROW).all()
+    assert (counts[narrow] < st.DENSE_ROW).all()
     assert not narrow[np.argmax(counts)]           # the reference node's flow sum
 
 

@@ -39,13 +39,14 @@ from mechatron.compiler.graph.matching import augment_from
 from mechatron.compiler.graph.polynomial import Laurent, atom
 from mechatron.errors import StructuralError
 
-__all__ = ["Reduction", "Combined", "reveal", "owner_of", "sparse_jacobian"]
+__all__ = ["Reduction", "Combined", "reveal", "owner_of", "sparse_jacobian", "jacobian_apart",
+           "DENSE_ROW"]
 
-_DENSE_ROW = 64   # rows with more variables are differentiated apart (sparse_jacobian)
+DENSE_ROW = 64   # rows with more variables are differentiated apart (sparse_jacobian)
 
 
 def sparse_jacobian(expr: ca.SX, syms: ca.SX, sparsity: ca.Sparsity | None = None) -> ca.SX:
-    """``casadi.jacobian(expr, syms)``, with the rows that hold more than `_DENSE_ROW`
+    """``casadi.jacobian(expr, syms)``, with the rows that hold more than `DENSE_ROW`
     variables differentiated apart from the others.
 
     One dense row (the flow balance of a reference node that every branch of a ladder
@@ -55,7 +56,7 @@ def sparse_jacobian(expr: ca.SX, syms: ca.SX, sparsity: ca.Sparsity | None = Non
     if sparsity is None:
         sparsity = ca.jacobian_sparsity(expr, syms)
     count = np.diff(np.asarray(sparsity.get_crs()[0], dtype=np.int64))
-    dense = np.flatnonzero(count > _DENSE_ROW)
+    dense = np.flatnonzero(count > DENSE_ROW)
     if dense.size == 0 or dense.size == count.size:
         return ca.jacobian(expr, syms)
     return jacobian_apart(expr, syms, dense)

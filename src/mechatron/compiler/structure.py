@@ -20,7 +20,7 @@ import numpy as np
 from mechatron.compiler.flatten import ColumnRows, Origins, stack_columns
 from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
                                       maximum_matching, pantelides, tear)
-from mechatron.compiler.linear import (_DENSE_ROW, Combined, jacobian_apart, owner_of,
+from mechatron.compiler.linear import (DENSE_ROW, Combined, jacobian_apart, owner_of,
                                        reveal, sparse_jacobian)
 from mechatron.compiler.pivoting import largest, pivot_columns
 from mechatron.errors import StructuralError
@@ -93,7 +93,7 @@ def _pattern(expr: ca.SX, syms: ca.SX, narrow: np.ndarray | None = None
 
 
 def _narrow_rows(origins, n_rows: int) -> np.ndarray | None:
-    """Which of ``n_rows`` residuals hold fewer than `_DENSE_ROW` variables for certain,
+    """Which of ``n_rows`` residuals hold fewer than `DENSE_ROW` variables for certain,
     read off their origins (`Origins`) without a sweep: a row of a class template's
     equation holds at most as many variables as the template has symbols (its
     instance's variables, their derivatives, parameters and time; aliases replaced by
@@ -104,7 +104,7 @@ def _narrow_rows(origins, n_rows: int) -> np.ndarray | None:
         return None
     narrow = np.zeros(n_rows, dtype=bool)
     if origins.templates:
-        small = np.array([t.svec.numel() < _DENSE_ROW for t in origins.templates])
+        small = np.array([t.svec.numel() < DENSE_ROW for t in origins.templates])
         at = np.flatnonzero(origins.which >= 0)
         narrow[at] = small[origins.which[at]]
         if origins.given:
