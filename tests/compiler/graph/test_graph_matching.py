@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from mechatron.compiler.graph import Matching, maximum_matching
-from mechatron.compiler.graph.matching import _karp_sipser
+from mechatron.compiler.graph import matching as matching_module
+from mechatron.compiler.graph.matching import _karp_sipser, _unique_matching
 
 
 def assert_valid(matching, n_var, adj, allowed=None):
@@ -221,3 +222,69 @@ def test_karp_sipser_start_follows_its_rule(seed):
     eq_to_var, var_to_eq = _karp_sipser(n_var, rows)
     assert (eq_to_var, var_to_eq) == karp_sipser_by_rule(n_var, rows)
     assert_valid(Matching(eq_to_var, var_to_eq), n_var, rows)
+
+
+def loop_free(rng, n_eq, unused=0):
+    """Equations that can be solved one after another, each for its own variable from
+    those of up to three equations solved before it (a triangular system, its equations,
+    variables and row entries shuffled), plus ``unused`` variables that appear nowhere:
+    the maximum matching is unique."""
+    order = rng.sample(range(n_eq), n_eq)           # the order they can be solved in
+    own = rng.sample(range(n_eq + unused), n_eq)    # each equation's variable
+    adj = [[] for _ in range(n_eq)]
+    for k, e in enumerate(order):
+        before = rng.sample(range(k), min(k, rng.randint(0, 3)))
+        adj[e] = [own[e]] + [own[order[j]] for j in before]
+        rng.shuffle(adj[e])
+    return n_eq + unused, adj, own
+
+
+def by_python_steps(monkeypatch, n_var, adj, allowed=None):
+    """`maximum_matching` by its own greedy start and phases alone."""
+    with monkeypatch.context() as patch:
+        patch.setattr(matching_module, "UNIQUE_MIN_EQUATIONS", 1 << 62)
+        return maximum_matching(n_var, adj, allowed=allowed)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_large_loop_free_system_is_matched_on_arrays_as_by_the_python_steps(
+        seed, monkeypatch):
+    """A network without algebraic loops has one maximum matching: found on arrays (the
+    fast path is taken), it is the one the greedy start and phases give, pair for pair."""
+    rng = random.Random(seed)
+    n_var, adj, own = loop_free(rng, 600 + 100 * seed, unused=7 * seed)
+    fast = _unique_matching(n_var, adj, np.array([v for row in adj for v in row]), None)
+    assert fast is not None and fast.eq_to_var == own
+    assert maximum_matching(n_var, adj) == fast == by_python_steps(monkeypatch, n_var, adj)
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_the_matching_is_the_same_with_or_without_the_array_path(seed, monkeypatch):
+    """Whatever the graph (loops, free variables, empty rows, variables not allowed),
+    the path on arrays either declines or gives the very matching of the Python steps."""
+    rng = random.Random(seed)
+    kind = seed % 3
+    if kind == 0:                   # loop-free: the array path answers
+        n_var, adj, _ = loop_free(rng, rng.randint(1, 40), unused=rng.randint(0, 3))
+    else:                           # anything: mostly declined
+        n_eq, n_var = rng.randint(1, 30), rng.randint(1, 30)
+        adj = [rng.sample(range(n_var), rng.randint(0, min(3, n_var))) for _ in range(n_eq)]
+        if kind == 2:               # a loop of two equations in two variables, or more
+            adj += [[n_var, n_var + 1], [n_var + 1, n_var]]
+            n_var += 2
+    allowed = None if seed % 4 else {v for v in range(n_var) if rng.random() < 0.8}
+    monkeypatch.setattr(matching_module, "UNIQUE_MIN_EQUATIONS", 0)
+    got = maximum_matching(n_var, adj, allowed=allowed)
+    assert got == by_python_steps(monkeypatch, n_var, adj, allowed)
+    assert_valid(got, n_var, adj, allowed)
+
+
+@pytest.mark.parametrize("n_var,adj", [
+    (2, [[0, 1], [1, 0]]),              # a loop: two matchings
+    (2, [[0, 1]]),                      # a variable left free that appears
+    (1, [[0], [0]]),                    # an equation left free that has a variable
+    (3, [[0], [0, 1, 2], [1, 2]]),      # a loop behind a forced pair
+])
+def test_the_array_path_declines_a_graph_with_several_maximum_matchings(n_var, adj):
+    flat = np.array([v for row in adj for v in row], dtype=np.int64)
+    assert _unique_matching(n_var, adj, flat, None) is None

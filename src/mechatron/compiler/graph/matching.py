@@ -9,7 +9,10 @@ A system of ``n_eq`` equations in ``n_var`` variables is described by its incide
 `maximum_matching` first matches greedily (Karp–Sipser when a plain greedy pass
 leaves many equations free), then grows the matching along shortest augmenting paths
 in phases (Hopcroft–Karp), so its cost is ``O(m sqrt(n))`` for ``m`` incidences.
-Every search is iterative: paths of any length are fine.
+Every search is iterative: paths of any length are fine. A large graph whose maximum
+matching is unique (a network without algebraic loops has one) gets it from SciPy's
+Hopcroft–Karp on arrays instead: the same matching, without a Python step per incidence
+(`_unique_matching`).
 
 The private helper `augment_from` grows a matching by one augmenting path from a
 single root and reports what it visited when there is none; Pantelides' algorithm
@@ -23,6 +26,8 @@ from dataclasses import dataclass
 from itertools import chain
 
 import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
 __all__ = ["UNMATCHED", "Matching", "maximum_matching"]
 
@@ -31,6 +36,9 @@ UNMATCHED = -1
 
 DEAD = 1 << 62
 """Mark of a vertex that no augmenting path can ever pass again (see `augment_from`)."""
+
+UNIQUE_MIN_EQUATIONS = 500
+"""From this many equations on, `maximum_matching` first tries `_unique_matching`."""
 
 
 @dataclass
@@ -106,8 +114,13 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
     """
     flat = checked_entries(n_var, adj)
     rows = adj
-    if allowed is not None:
-        rows = allowed_rows(adj, allowed_mask(n_var, allowed), flat)
+    mask = None if allowed is None else allowed_mask(n_var, allowed)
+    if initial is None and flat is not None and len(adj) >= UNIQUE_MIN_EQUATIONS:
+        unique = _unique_matching(n_var, adj, flat, mask)
+        if unique is not None:
+            return unique
+    if mask is not None:
+        rows = allowed_rows(adj, mask, flat)
     if initial is None:
         eq_to_var = [UNMATCHED] * len(rows)
         var_to_eq = [UNMATCHED] * n_var
@@ -119,6 +132,45 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
         _greedy(rows, eq_to_var, var_to_eq)
     _hopcroft_karp(rows, eq_to_var, var_to_eq)
     return Matching(eq_to_var, var_to_eq)
+
+
+def _unique_matching(n_var: int, adj: Sequence[Sequence[int]], flat: np.ndarray,
+                     mask: list[bool] | None) -> Matching | None:
+    """The maximum matching of the graph when it has exactly one, else None.
+
+    SciPy's Hopcroft–Karp finds a maximum matching on the incidence as arrays (``flat``
+    holds the entries of `adj` row after row; ``mask`` the allowed variables, if not
+    all). It is the only one, and so the one `maximum_matching` would find by its own
+    steps, when no other matching has as many pairs: every equation that has a variable
+    and every variable that appears is matched (no alternating path can start at a free
+    vertex), and no cycle alternates between matched and unmatched pairs, i.e. the
+    equations ordered by "uses the variable matched to" form no cycle (every strongly
+    connected component one equation: the block-triangular form has no algebraic loop).
+    """
+    n_eq = len(adj)
+    lens = np.fromiter(map(len, adj), dtype=np.int64, count=n_eq)
+    eqs, var = np.repeat(np.arange(n_eq), lens), flat
+    if mask is not None:
+        keep = np.asarray(mask, dtype=bool)[var]
+        eqs, var = eqs[keep], var[keep]
+    ones = np.ones(var.size, dtype=np.int32)
+    eq_to_var = maximum_bipartite_matching(
+        csr_matrix((ones, (eqs, var)), shape=(n_eq, n_var)), perm_type="column")
+    has = np.zeros(n_eq, dtype=bool)
+    has[eqs] = True
+    if (eq_to_var[has] < 0).any():
+        return None
+    matched = np.flatnonzero(eq_to_var >= 0)
+    var_to_eq = np.full(n_var, UNMATCHED, dtype=np.int64)
+    var_to_eq[eq_to_var[matched]] = matched
+    to = var_to_eq[var]
+    if (to < 0).any():          # a variable that appears is free
+        return None
+    other = to != eqs           # an equation's own variable is no edge of the order
+    order = csr_matrix((ones[other], (eqs[other], to[other])), shape=(n_eq, n_eq))
+    if connected_components(order, directed=True, connection="strong")[0] != n_eq:
+        return None
+    return Matching(eq_to_var.astype(np.int64).tolist(), var_to_eq.tolist())
 
 
 def check_adjacency(n_var: int, adj: Sequence[Sequence[int]]) -> None:
