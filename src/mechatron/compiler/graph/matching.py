@@ -110,7 +110,10 @@ def maximum_matching(n_var: int, adj: Sequence[Sequence[int]], *,
     vertex of degree one first, else the free variable of least degree). Then
     Hopcroft–Karp phases: a breadth-first search layers the graph from the free
     equations, and iterative depth-first searches augment along vertex-disjoint
-    shortest paths. Cost ``O(m sqrt(n))``.
+    shortest paths. Cost ``O(m sqrt(n))``. From `UNIQUE_MIN_EQUATIONS` equations on
+    (without ``initial``), a graph whose maximum matching is unique is matched on arrays
+    first (`_unique_matching`): the same matching, found without a Python step per
+    incidence.
     """
     flat = checked_entries(n_var, adj)
     rows = adj
