@@ -116,6 +116,7 @@ def test_the_rows_of_class_templates_are_told_narrow_by_their_origins(monkeypatc
         return csr(expr, syms, narrow)
 
     monkeypatch.setattr(st, "_csr", spy)
+    monkeypatch.setattr(st, "_SAMPLED_PATTERN_ROWS", 100)   # the mask is read from here on
     mt.compile_model(ladder(200))
     (expr, syms, narrow), = seen
     counts = np.diff(np.asarray(ca.jacobian_sparsity(expr, syms).get_crs()[0]))

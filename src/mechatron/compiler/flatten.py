@@ -2315,8 +2315,7 @@ def _folded_variables(flat: FlatModel, folded, folding) -> None:
     names = [path + sfx for path, sfxs in zip(map(_PATH_OF, ports),
                                              map(suffixes.__getitem__, types))
              for sfx in sfxs]
-    units, docs = (list(chain.from_iterable(map({cls: plan[k] for cls, plan in plans.items()}
-                                                .__getitem__, types))) for k in (1, 2))
+    units, docs = (list(chain.from_iterable(plans[cls][k] for cls in types)) for k in (1, 2))
     position = np.repeat(list(map(_POSITION_OF, ports)), var_count).tolist()
     order = np.repeat(list(map(_ORDER_OF, ports)), var_count).tolist()
     flat.folded = FoldedColumns(names, units, docs, position, order, ptr, rows)
@@ -2327,10 +2326,10 @@ def _folded_terms(types: list, plans: dict, firsts: list, insides: list[list],
     """The terms of the folded ports' variables as compressed rows ``(ptr, rows)``, and
     how many variables each port has. Port ``i`` (of class ``types[i]``, its keys and
     which are across in ``plans``, see `_folded_plan`) has each variable in declaration
-    order; an across variable's term is the
-    row of that key of the node's first member ``firsts[i]``, a through variable's those
-    of the inside members ``insides[i]``. A member's row is its first variable's plus the
-    key's place among its own class's variables (a subclass may place it elsewhere)."""
+    order; an across variable's term is the row of that key of the node's first member
+    ``firsts[i]``, a through variable's those of the inside members ``insides[i]``. A
+    member's row is its first variable's plus the key's place among its own class's
+    variables (a subclass may place it elsewhere)."""
     n_in = np.fromiter(map(len, insides), dtype=np.intp, count=len(insides))
     inner = list(chain.from_iterable(insides))
     b_first, b_inner = _rows_of(firsts, late), _rows_of(inner, late)

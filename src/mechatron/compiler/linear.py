@@ -39,8 +39,8 @@ from mechatron.compiler.graph.matching import augment_from
 from mechatron.compiler.graph.polynomial import Laurent, atom
 from mechatron.errors import StructuralError
 
-__all__ = ["Reduction", "Combined", "reveal", "owner_of", "sparse_jacobian", "jacobian_apart",
-           "DENSE_ROW"]
+__all__ = ["Reduction", "Combined", "reveal", "owner_of", "sparse_jacobian",
+           "jacobian_apart", "DENSE_ROW"]
 
 DENSE_ROW = 64   # rows with more variables are differentiated apart (sparse_jacobian)
 

@@ -242,8 +242,9 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     if res:
         res_vec, var_vec = stacked if stacked is not None else (ca.vertcat(*res),
                                                                 ca.vertcat(*var_syms))
-    adj, pattern, jac = _csr(res_vec, var_vec, _narrow_rows(origins, len(res))) \
-        if res else ([], None, None)
+    # which rows the sampled search for dense rows may skip: read only where it runs
+    narrow = _narrow_rows(origins, len(res)) if len(res) >= _SAMPLED_PATTERN_ROWS else None
+    adj, pattern, jac = _csr(res_vec, var_vec, narrow) if res else ([], None, None)
     # derivative symbols that appear nowhere do not make their variable a state
     used = set(chain.from_iterable(adj))
     for i, d in enumerate(var_to_diff):
