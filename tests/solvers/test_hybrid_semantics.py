@@ -482,6 +482,37 @@ def test_dc_motor_starts_in_steady_state_from_an_initial_equation():
     np.testing.assert_allclose(res["ind.i"], B * w_ss / K, rtol=1e-7)
 
 
+class Holder(mt.Component):
+    """A part two levels down: its initial equations and discrete variable are found
+    below a component that has neither."""
+
+    inner = Lag(u=0.8)
+
+
+def test_initial_equations_of_a_system_and_of_parts_at_any_depth():
+    """Flattening reads initial equations and discrete variables off the elements of
+    the classes that declare them (the System's own, ``add_initial_equation``, among
+    them): the RC discharge starts where the System's initial equation puts it, and the
+    lags below start in steady state with their discrete variable set."""
+    from mechatron.library import electrical as el
+    R, C, V0 = 2.0, 0.25, 0.5
+    m = mt.System("discharge")
+    r = m.add("r", el.Resistor(R=R))
+    c = m.add("c", el.Capacitor(C=C))
+    g = m.add("g", el.ElectricalReference())
+    m.add("lag", Lag(u=1.3))
+    m.add("holder", Holder())
+    m.connect(c.p, r.p)
+    m.connect(r.n, c.n, g.port)
+    m.add_initial_equation(lambda: c.v == V0)
+    t = np.linspace(0.0, 1.0, 11)
+    res = mt.simulate(m, 1.0, t_out=t, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(res["c.v"], V0 * np.exp(-t / (R * C)), rtol=1e-6)
+    np.testing.assert_allclose(res["lag.x"], 1.3, rtol=1e-9)
+    np.testing.assert_allclose(res["holder.inner.x"], 0.8, rtol=1e-9)
+    assert res.final("lag.n") == 3 and res.final("holder.inner.n") == 3
+
+
 def test_conflicting_initial_equation_and_start_value_are_named():
     with pytest.raises(mt.errors.InitializationError,
                        match=r"Conflicting targets: .*(x = 1 \(high\).*initial equation|"

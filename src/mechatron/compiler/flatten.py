@@ -821,21 +821,29 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     elements = list(_walk(model))
     planned, folded = plan_subsystems(model, elements)
     components = flat.components
-    classes = set()
+    # each class met: whether its elements declare discrete variables or write initial
+    # equations (`_discrete_declarations` reads those elements alone, picked here)
+    marked: dict[type, bool] = {}
+    discrete = []
     for el in elements:
-        classes.add(type(el))
+        cls = type(el)
+        mark = marked.get(cls)
+        if mark is None:
+            mark = marked[cls] = _discrete_or_initial(cls)
+        if mark:
+            discrete.append(el)
         if isinstance(el, Component):
             if el._partial and el is not model:
-                problems.append(f"{el.describe()}: {type(el).__name__} is a partial "
+                problems.append(f"{el.describe()}: {cls.__name__} is a partial "
                                 "class (an interface); use a concrete component.")
-            components[el._path_cache] = type(el).__name__
-    flat.classes = frozenset(classes)
+            components[el._path_cache] = cls.__name__
+    flat.classes = frozenset(marked)
     _bind_symbols(flat, elements, problems, folded)
     _external_inputs(flat, model)
     try:
         with flat.context:
             connects = _collect_equations(flat, elements, problems, planned)
-            _discrete_declarations(flat, elements, problems)
+            _discrete_declarations(flat, discrete, problems)
         _connections(flat, model, elements, connects, problems, planned, folded)
     finally:
         for el in elements:
@@ -2695,12 +2703,28 @@ def _discrete_keys(cls) -> tuple:
     return tuple((k, d) for k, d in cls._declarations.items() if isinstance(d, Discrete))
 
 
+@functools.lru_cache(maxsize=None)
+def _writes_initial(cls) -> bool:
+    """Whether a class of the tree writes ``initial_equations`` of its own (once per
+    class; `mechatron.core.component.System` does, for ``add_initial_equation``)."""
+    return issubclass(cls, Component) and bool(_own_methods(cls, "initial_equations"))
+
+
+def _discrete_or_initial(cls) -> bool:
+    """Whether `_discrete_declarations` reads the elements of ``cls``."""
+    return bool(_discrete_keys(cls)) or _writes_initial(cls)
+
+
 def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     """Record the discrete variables with their kind and collect initial equations.
 
     A ``Discrete`` declaration is a discrete state even if no action assigns it (then it
     keeps its start value: ``der(v) == 0``); an action target that is not differentiated
     anywhere is a discrete Real (its ``der(v) == 0`` was added by ``_discrete_states``).
+    ``elements`` are those of the classes that declare discrete variables or write
+    initial equations (`_discrete_or_initial`), picked in tree order while flattening:
+    the root of a model built as a `mechatron.core.component.System` is among them, and
+    no further walk over every element is made for it.
     """
     ctx = flat.context
     # the equations der(v) == 0 of `_discrete_states`, which only event actions add
@@ -2709,15 +2733,8 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
             name = ctx.integral.get(eq.residual.name()) if eq.residual.is_symbolic() else None
             if name:
                 flat.discrete[name] = "real"
-    # per class: its Discrete declarations, and whether it writes initial equations
-    # (worked out once per class, not once per element); no walk over the elements
-    # when no class of the tree (`FlatModel.classes`) has either
-    info = {cls: (_discrete_keys(cls), issubclass(cls, Component) and
-                  bool(_own_methods(cls, "initial_equations"))) for cls in flat.classes}
-    if not any(keys or initial for keys, initial in info.values()):
-        return
     for el in elements:
-        for key, decl in info[type(el)][0]:
+        for key, decl in _discrete_keys(type(el)):
             path = _join(el.path, key)
             sym_name = flat.variables[path].sym.name()
             if sym_name not in flat.discrete and sym_name in ctx.derivative:
@@ -2730,7 +2747,7 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
                     "(discrete variable, changed only by events)", el.path))
             flat.discrete[sym_name] = decl.discrete_kind
     for el in elements:
-        if not info[type(el)][1]:
+        if not _writes_initial(type(el)):
             continue
         for klass, items in _class_calls(el, "initial_equations", el.path):
             for k, item in enumerate(_as_equations(items)):
