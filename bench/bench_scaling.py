@@ -44,8 +44,9 @@ N = 1000 compiles spread by 5 % either way and the long ones by a few tenths of 
 percent, so the fastest of thirty lies further into its spread than the fastest of
 three: the ratio of the plain minima (printed beside) reads about 0.1 high. Means and
 medians are printed beside it, with every run and its passes, user and kernel time
-apart, and what one page fault costs the machine before and after. Its peer, run beside each
-compile in a fresh process: the same structural passes written by hand on NumPy/SciPy
+apart, and what one page fault costs the machine before and after; each pass's median
+per equation at both sizes is printed with its growth (where the growth is). Its peer,
+run beside each compile in a fresh process: the same structural passes written by hand on NumPy/SciPy
 arrays (``structure_on_arrays``: flattening, connection sets, alias elimination,
 matching, BLT; no symbolic expressions), with its own growth and the compile's cost
 over it.
@@ -571,8 +572,17 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
         f"{growth_user['min_equal_draws']:.3f}, plain {growth_user['min']:.3f}, "
         f"medians {growth_user['median']:.3f}; a fresh page "
         f"{pages[0]['us_per_page']:.2f} and {pages[1]['us_per_page']:.2f} us")
+    # where the growth is: each pass's median per equation at both sizes
+    per_pass = {key: {str(n): statistics.median(p[key] for p in stats[str(n)][
+                    "passes_us_per_equation"]) for n in (small, large)}
+                for key in a["passes_us_per_equation"][0]}
+    log("per pass, medians, us/equation N=" + f"{small} -> {large}: " + ", ".join(
+        f"{key} {v[str(small)]:.2f} -> {v[str(large)]:.2f} "
+        f"({v[str(large)] / v[str(small)]:.2f}x)" for key, v in per_pass.items()
+        if v[str(small)] > 0))
     return {"small": small, "large": large, "rounds": rounds, "per_round": per_round,
             "sizes": stats, "growth": growth, "growth_user": growth_user, "goal": 1.3,
+            "passes_median_us_per_equation": per_pass,
             "met": growth["min_equal_draws"] < 1.3, "machine_spells_before_after": spells,
             "fresh_page_cost_before_after": pages,
             "peer_structure_on_arrays": {"sizes": on_arrays, "growth": peer_growth,

@@ -148,6 +148,13 @@ def test_compile_growth_reads_what_its_fresh_processes_write(bench_scaling, monk
         large["min"] / statistics.mean(small["us_per_equation"]))
     assert out["met"] == (out["growth"]["min_equal_draws"] < out["goal"])
     assert set(large["passes_us_per_equation"][0]) >= {"flatten", "structure", "total"}
+    # each pass's median per equation at both sizes (where the growth is)
+    per_pass = out["passes_median_us_per_equation"]
+    assert set(per_pass) == set(large["passes_us_per_equation"][0])
+    for key, both in per_pass.items():
+        for n, size in (("5", small), ("10", large)):
+            assert both[n] == pytest.approx(statistics.median(
+                p[key] for p in size["passes_us_per_equation"]))
     # user and kernel time apart: user alone grows as the ratio of the user times
     for stat, f in (("min", min), ("median", statistics.median)):
         assert out["growth_user"][stat] == pytest.approx(
