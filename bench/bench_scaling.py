@@ -46,10 +46,10 @@ three: the ratio of the plain minima (printed beside) reads about 0.1 high. Mean
 medians are printed beside it, with every run and its passes, user and kernel time
 apart, and what one page fault costs the machine before and after; each pass's median
 per equation at both sizes is printed with its growth (where the growth is). Its peer,
-run beside each compile in a fresh process: the same structural passes written by hand on NumPy/SciPy
-arrays (``structure_on_arrays``: flattening, connection sets, alias elimination,
-matching, BLT; no symbolic expressions), with its own growth and the compile's cost
-over it.
+run beside each compile in a fresh process: the same structural passes written by hand
+on NumPy/SciPy arrays (``structure_on_arrays``: flattening, connection sets, alias
+elimination, matching, BLT; no symbolic expressions), with its own growth and the
+compile's cost over it.
 
 Compile work counted, not timed (``--counted``): the instructions and the data-cache
 misses of compiling the RC ladder at N = 1000 and N = 10000, per flat equation, counted by
