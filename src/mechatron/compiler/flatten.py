@@ -2197,6 +2197,11 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
         planned = folded = None
     port_types = (Connector, SignalRef)
     for con, writer in connects:
+        ports = con.ports
+        if len(ports) == 2 and type(ports[0]) is type(ports[1]) and \
+                isinstance(ports[0], port_types):
+            joined.append((writer, ports))      # the common case: two ports of a kind
+            continue
         resolved = []
         for p in con.ports:
             if isinstance(p, port_types):

@@ -88,8 +88,8 @@ def connection_sets(connections) -> list[ConnectionSet]:
     component that wrote a ``connect`` and the resolved ports it joins (Connectors or
     SignalRefs). Members are ordered by path within a set, sets by their first member, so
     that the result does not depend on the order the connects were written in."""
-    # each element by number; a connector's key is (id, side), a signal's its port_key
-    # with the side (as port_key, without building a tuple per connector)
+    # each element by number; a connector's key is its id and side in one integer, a
+    # signal's its port_key with the side (no tuple per connector)
     number: dict = {}
     members: list[Member] = []
     parent: list[int] = []
@@ -102,7 +102,7 @@ def connection_sets(connections) -> list[ConnectionSet]:
                 key = ("signal", id(port.owner), port.name, outside)
             else:
                 outside = port._parent is writer
-                key = (id(port), outside)
+                key = 2 * id(port) + outside
             k = number.get(key)
             if k is None:
                 k = number[key] = len(members)
@@ -117,7 +117,9 @@ def connection_sets(connections) -> list[ConnectionSet]:
     groups: dict[int, list[Member]] = {}
     for k, member in enumerate(members):
         groups.setdefault(root_of(parent, k), []).append(member)
-    sets = [ConnectionSet(sorted(g, key=_order)) for g in groups.values()]
+    for g in groups.values():
+        g.sort(key=_order)
+    sets = [ConnectionSet(g) for g in groups.values()]
     sets.sort(key=lambda s: _order(s.members[0]))
     return sets
 
