@@ -576,7 +576,7 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
     per_pass = {key: {str(n): statistics.median(p[key] for p in stats[str(n)][
                     "passes_us_per_equation"]) for n in (small, large)}
                 for key in a["passes_us_per_equation"][0]}
-    log("per pass, medians, us/equation N=" + f"{small} -> {large}: " + ", ".join(
+    log(f"per pass, medians, us/equation N={small} -> {large}: " + ", ".join(
         f"{key} {v[str(small)]:.2f} -> {v[str(large)]:.2f} "
         f"({v[str(large)] / v[str(small)]:.2f}x)" for key, v in per_pass.items()
         if v[str(small)] > 0))

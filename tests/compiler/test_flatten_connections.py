@@ -98,3 +98,18 @@ def test_a_subsystem_port_of_another_connector_class_carries_its_own_variables()
     np.testing.assert_allclose(res["w.p.i"], current, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(res["w.n.v"], v_c, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(res["w.n.i"], -current, rtol=1e-5, atol=1e-7)
+
+
+def test_a_connect_of_something_not_a_port_is_named_and_its_port_left_open():
+    """A connect is taken as written when it joins ports; anything else is resolved to a
+    port or signal, and what is neither is reported with what to pass instead, beside
+    the port it left unconnected."""
+    m = mt.System("bad")
+    r = m.add("r", el.Resistor(R=1.0))
+    g = m.add("g", el.ElectricalReference())
+    m.connect(r.p, g.port)
+    m.connect(r.n, 3.0)
+    with pytest.raises(mt.errors.ModelError) as err:
+        mt.compile_model(m)
+    assert "bad: connect() takes ports, got 3.0. Pass a port such as r1.p" in str(err.value)
+    assert "port 'r.n' (electrical) is not connected" in str(err.value)

@@ -2197,25 +2197,23 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
         planned = folded = None
     port_types = (Connector, SignalRef)
     for con, writer in connects:
-        ports = con.ports
-        if len(ports) == 2 and type(ports[0]) is type(ports[1]) and \
-                isinstance(ports[0], port_types):
-            joined.append((writer, ports))      # the common case: two ports of a kind
-            continue
-        resolved = []
-        for p in con.ports:
-            if isinstance(p, port_types):
-                r = p
-            else:
-                if sym_owner is None:
-                    sym_owner = _signal_owners(elements)
-                r = _resolve(flat, p, sym_owner)
-            if r is None:
-                where = writer.path or flat.name
-                problems.append(f"{where}: connect() takes ports, got {p!r}. Pass a port "
-                                "such as r1.p or a signal such as src.y.")
-                continue
-            resolved.append(r)
+        # ports as written (the common case), else each resolved to a port or signal
+        resolved = con.ports
+        if not all(map(isinstance, resolved, repeat(port_types))):
+            resolved = []
+            for p in con.ports:
+                if isinstance(p, port_types):
+                    r = p
+                else:
+                    if sym_owner is None:
+                        sym_owner = _signal_owners(elements)
+                    r = _resolve(flat, p, sym_owner)
+                if r is None:
+                    where = writer.path or flat.name
+                    problems.append(f"{where}: connect() takes ports, got {p!r}. Pass a "
+                                    "port such as r1.p or a signal such as src.y.")
+                    continue
+                resolved.append(r)
         if len(resolved) == 2 and type(resolved[0]) is type(resolved[1]):
             joined.append((writer, resolved))       # the common case, compatible
             continue
