@@ -464,6 +464,35 @@ def test_parameters_passed_on_unchanged_are_their_parents_symbols():
         assert name in used
 
 
+def test_a_value_passed_on_is_checked_against_each_parts_bounds_and_recorded():
+    """A value passed on unchanged (``R=R``) down two levels meets the bounds of every
+    part that takes it, each named where it is; the records of the bindings, formed when
+    read, hold each part's value, unit and binding, in the order they were bound."""
+    m = mt.System("negative")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    gnd = m.add("gnd", el.ElectricalReference())
+    pair = m.add("pair", Pair(R=-5.0, C=1e-3))
+    m.connect(src.n, gnd.port)
+    m.connect(src.p, pair.p)
+    m.connect(pair.gnd, gnd.port)
+    with pytest.raises(mt.errors.ParameterError) as info:
+        mt.compile_model(m)
+    lines = [line.strip() for line in str(info.value).splitlines()[1:]]
+    assert lines == [f"{who}: R must be >= 0, got -5." for who in (
+        "Pair 'pair'", "Stage 'pair.first'", "Resistor 'pair.first.r'",
+        "Stage 'pair.second'", "Resistor 'pair.second.r'")]
+
+    flat = fl.flatten(passed_on_model())
+    bound = flat.bound_parameters
+    assert list(bound) == [f"pair.{stage}{part}.{key}" for stage in ("first", "second")
+                           for key, part in (("R", ""), ("C", ""), ("R", ".r"),
+                                             ("C", ".c"))]
+    assert flat.bound_parameters is bound       # formed once
+    first = bound["pair.first.R"]
+    assert (first.value, first.unit, first.owner, first.binding) == (
+        4.0, "Ohm", "pair.first", "R of 'pair'")
+
+
 def test_the_passed_on_model_follows_its_circuit():
     """Steady state: no current through the capacitors, so 2 V drives the series
     resistors (4 + 4 Ohm) and the leak (2 Ohm): 0.2 A, and the leak sees 0.4 V."""

@@ -645,8 +645,9 @@ class FlatModel:
     name: str
     context: BuildContext
     parameters: dict[str, FlatParameter] = field(default_factory=dict)
-    #: parameters of parts bound to expressions of their parents' parameters
-    bound_parameters: dict[str, BoundParameter] = field(default_factory=dict)
+    #: the parts' parameters bound to expressions of their parents' parameters, in
+    #: binding order: records, or what forms one (`bound_parameters`)
+    bindings: list = field(default_factory=list, repr=False)
     variables: MutableMapping[str, FlatVariable] = field(default_factory=_Variables)
     equations: list[FlatEquation] = field(default_factory=list)
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
@@ -686,6 +687,21 @@ class FlatModel:
             return ([f.names[i] for i in k_list], [f.units[i] for i in k_list],
                     [f.docs[i] for i in k_list], position[k], (ptr, f.term_rows[at]))
         return f.names, f.units, f.docs, position, (f.term_ptr, f.term_rows)
+
+    @property
+    def bound_parameters(self) -> dict[str, BoundParameter]:
+        """The parameters of parts bound to expressions of their parents' parameters, by
+        path. No pass reads them (the equations hold the parent's symbol); the record of
+        one passed on unchanged (``R=R``: one per instance of a reused subsystem) is
+        formed on the first read, from what `_bind_expression` noted."""
+        out = self.__dict__.get("_bound_parameters")
+        if out is None or len(out) != len(self.bindings):
+            out = self.__dict__["_bound_parameters"] = {}
+            for k, item in enumerate(self.bindings):
+                if type(item) is tuple:
+                    item = self.bindings[k] = _row_bound(self, *item)
+                out[item.name] = item
+        return out
 
     @property
     def n_folded(self) -> int:
@@ -1367,8 +1383,6 @@ def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows, stor
         problems.add(UnitError, f"{_binding_where(el, key, expr)}: {message}")
         return ca.SX.nan(), float("nan"), -1
     pvals = values.get(id(parent), {})
-    path = _join(el._path_cache or "", key)
-    binding = f"{_expression_text(expr)} of '{parent._path_cache or flat.name}'"
     row = -1
     if name is not None:            # R=R: the parent's symbol and value themselves
         value = float(pvals.get(name, float("nan")))
@@ -1377,9 +1391,10 @@ def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows, stor
             row = rows[_parameter_places(type(parent))[name]]
         if row >= 0:
             _check_range(el, key, decl, value, problems)
-            flat.bound_parameters[path] = _RowBoundParameter(
-                path, store, row, value, decl.unit, decl.doc, el._path_cache or "",
-                binding)
+            # its record formed when read (FlatModel.bound_parameters); paths, not
+            # elements: a flat model holds no element (no cycle through their symbols)
+            flat.bindings.append((el._path_cache or "", key, decl, expr,
+                                  parent._path_cache, store, row, value))
             return None, value, row
         sym = parent._syms[name]
     else:
@@ -1387,9 +1402,24 @@ def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows, stor
         sym = sym if isinstance(sym, ca.SX) else ca.SX(sym)
         value = float(expr.evaluate(lambda n: pvals.get(n, float("nan"))))
     _check_range(el, key, decl, value, problems)
-    flat.bound_parameters[path] = BoundParameter(
-        path, sym, value, decl.unit, decl.doc, el._path_cache or "", binding)
+    flat.bindings.append(BoundParameter(
+        _join(el._path_cache or "", key), sym, value, decl.unit, decl.doc,
+        el._path_cache or "", _binding_text(flat, expr, parent._path_cache)))
     return sym, value, row
+
+
+def _binding_text(flat, expr, parent_path: str | None) -> str:
+    """``"(R / 2) of 'motor'"``: a binding as written and where its names are read."""
+    return f"{_expression_text(expr)} of '{parent_path or flat.name}'"
+
+
+def _row_bound(flat, owner: str, key, decl, expr, parent_path, store, row,
+               value) -> BoundParameter:
+    """The record of parameter ``key`` of the element at ``owner``, passed on unchanged
+    from its parent at ``parent_path`` (see `_bind_expression`): the parent's symbol is
+    row ``row`` of the column ``store``."""
+    return _RowBoundParameter(_join(owner, key), store, row, value, decl.unit, decl.doc,
+                              owner, _binding_text(flat, expr, parent_path))
 
 
 def _binding_where(el, key, expr) -> str:
