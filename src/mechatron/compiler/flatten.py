@@ -691,7 +691,7 @@ class FlatModel:
     @property
     def bound_parameters(self) -> dict[str, BoundParameter]:
         """The parameters of parts bound to expressions of their parents' parameters, by
-        path. No pass reads them (the equations hold the parent's symbol); the record of
+        path. No pass reads them (the equations hold the parent's symbols); the record of
         one passed on unchanged (``R=R``: one per instance of a reused subsystem) is
         formed on the first read, from what `_bind_expression` noted."""
         out = self.__dict__.get("_bound_parameters")
