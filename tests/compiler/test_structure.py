@@ -136,3 +136,31 @@ def test_the_entries_of_a_sub_block_are_casadis():
     r, c = st._sub_entries(rows, cols, sp.shape, es, vs)
     theirs = sp.sub(es, vs, False)[0]
     assert sorted(zip(r.tolist(), c.tolist())) == sorted(zip(*theirs.get_triplet()))
+
+
+def test_one_equation_blocks_zeroed_piece_by_piece_give_the_same_functions(monkeypatch):
+    """The one-equation blocks of a ladder of 300 sections solved with their colours
+    zeroed in pieces of 7 rows (`_zeroed`, as on columns of a million rows) and at once:
+    the same states and functions, value for value."""
+    whole = mt.compile_model(ladder(300))
+    pieces = []
+    zeroed = st._zeroed
+
+    def spy(ex, xs):
+        pieces.append(ex.numel())
+        return zeroed(ex, xs)
+
+    monkeypatch.setattr(st, "_ZEROED_PIECE", 7)
+    monkeypatch.setattr(st, "_zeroed", spy)
+    cut = mt.compile_model(ladder(300))
+    assert max(pieces) > 2 * 7             # some colour was cut into pieces
+    assert cut.state_names == whole.state_names
+    assert cut.alg_names == whole.alg_names
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        x = rng.uniform(-1.0, 1.0, whole.f_ode.size1_in(1))
+        args = (0.7, x, np.zeros(whole.f_ode.size1_in(2)), whole.p0)
+        np.testing.assert_array_equal(np.asarray(cut.f_ode(*args)),
+                                      np.asarray(whole.f_ode(*args)))
+        np.testing.assert_array_equal(np.asarray(cut.f_out(*args)),
+                                      np.asarray(whole.f_out(*args)))
