@@ -81,13 +81,7 @@ def test_a_ladder_lowers_the_same_through_the_sampled_pattern(monkeypatch):
     assert sampled.alg_names == plain.alg_names
     for key in ("blocks", "largest_block", "tearing_variables", "equations"):
         assert sampled.report[key] == plain.report[key], key
-    rng = np.random.default_rng(5)
-    x = rng.uniform(-1.0, 1.0, plain.f_ode.size1_in(1))
-    args = (0.3, x, np.zeros(plain.f_ode.size1_in(2)), plain.p0)
-    np.testing.assert_array_equal(np.asarray(sampled.f_ode(*args)),
-                                  np.asarray(plain.f_ode(*args)))
-    np.testing.assert_array_equal(np.asarray(sampled.f_out(*args)),
-                                  np.asarray(plain.f_out(*args)))
+    _same_functions(sampled, plain, t=0.3, seed=5)
 
 
 def test_rows_known_to_be_narrow_are_left_out_of_the_probe_and_the_pattern_stays(
@@ -156,11 +150,17 @@ def test_one_equation_blocks_zeroed_piece_by_piece_give_the_same_functions(monke
     assert max(pieces) > 2 * 7             # some colour was cut into pieces
     assert cut.state_names == whole.state_names
     assert cut.alg_names == whole.alg_names
-    rng = np.random.default_rng(11)
-    for _ in range(3):
-        x = rng.uniform(-1.0, 1.0, whole.f_ode.size1_in(1))
-        args = (0.7, x, np.zeros(whole.f_ode.size1_in(2)), whole.p0)
-        np.testing.assert_array_equal(np.asarray(cut.f_ode(*args)),
-                                      np.asarray(whole.f_ode(*args)))
-        np.testing.assert_array_equal(np.asarray(cut.f_out(*args)),
-                                      np.asarray(whole.f_out(*args)))
+    _same_functions(cut, whole, t=0.7, seed=11, draws=3)
+
+
+def _same_functions(a, b, t: float, seed: int, draws: int = 1) -> None:
+    """The derivatives and logged variables of the compiled models ``a`` and ``b`` equal
+    value for value at time ``t``, at ``draws`` random states."""
+    rng = np.random.default_rng(seed)
+    for _ in range(draws):
+        x = rng.uniform(-1.0, 1.0, b.f_ode.size1_in(1))
+        args = (t, x, np.zeros(b.f_ode.size1_in(2)), b.p0)
+        np.testing.assert_array_equal(np.asarray(a.f_ode(*args)),
+                                      np.asarray(b.f_ode(*args)))
+        np.testing.assert_array_equal(np.asarray(a.f_out(*args)),
+                                      np.asarray(b.f_out(*args)))
