@@ -240,3 +240,27 @@ def test_a_singular_network_inside_a_planned_subsystem_is_named_in_physical_term
                        match=r"sources s\.i1 and s\.i2 form a cut set: their currents are "
                              r"not independent"):
         mt.compile_model(m)
+
+
+def test_an_instance_with_attributes_of_its_own_is_written_out(monkeypatch):
+    """A plan is read off the first instance of a class that has nothing beyond its
+    declarations; an instance with an attribute of its own (here the first and the last
+    of three) may connect differently, so its ports are written out, before and after
+    the plan is made."""
+    def build():
+        m = mt.System("marked")
+        src = m.add("src", el.DCVoltageSource(V=1.0))
+        g = m.add("g", el.ElectricalReference())
+        stages = [m.add(f"s{k}", Stage(R=1.0 + k, C=0.5)) for k in range(3)]
+        stages[0].note = "spare"
+        stages[2].note = "spare"
+        node = src.p
+        for s in stages:
+            m.connect(node, s.p)
+            m.connect(s.gnd, g.port)
+            node = s.n
+        m.connect(src.n, g.port)
+        return m
+
+    assert sorted(flatten(build()).folded.ports) == ["s1.gnd", "s1.n", "s1.p"]
+    assert_same(mt.compile_model(build()), unfolded(monkeypatch, build), 2.0)

@@ -835,12 +835,12 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     flat = FlatModel(name=name, context=BuildContext())
     problems = _Problems()
     elements = list(_walk(model))
-    planned, folded = plan_subsystems(model, elements)
     components = flat.components
     # each class met: whether its elements declare discrete variables or write initial
     # equations (`_discrete_declarations` reads those elements alone, picked here)
     marked: dict[type, bool] = {}
     discrete = []
+    parts = []                      # the components, in tree order
     for el in elements:
         cls = type(el)
         mark = marked.get(cls)
@@ -853,7 +853,9 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
                 problems.append(f"{el.describe()}: {cls.__name__} is a partial "
                                 "class (an interface); use a concrete component.")
             components[el._path_cache] = cls.__name__
+            parts.append(el)
     flat.classes = frozenset(marked)
+    planned, folded = plan_subsystems(model, parts)
     _bind_symbols(flat, elements, problems, folded)
     _external_inputs(flat, model)
     try:

@@ -45,25 +45,30 @@ class ClassPlan:
     each set, the name of the class's own port in it (or None) and the other members as
     tuples of names from the instance (``("r", "p")``), ordered by path."""
 
-    __slots__ = ("own", "sets", "has_time_scales")
+    __slots__ = ("own", "sets", "has_time_scales", "inner", "keys")
 
-    def __init__(self, own, sets, has_time_scales):
+    def __init__(self, own, sets, has_time_scales, keys=frozenset()):
         self.own = own                  # own port name -> index of its set
         self.sets = sets                # [(own port name | None, [names])]
         self.has_time_scales = has_time_scales
+        # a set that holds no port of the class: a node inside every instance
+        self.inner = any(owner is None for owner, _ in sets)
+        # what an instance's __dict__ may hold (the first instance's children)
+        self.keys = keys
 
 
-def plan_subsystems(model: Component, elements) -> tuple[dict, dict]:
-    """``(planned, folded)``: the instances wired by their class's plan, ``id -> (instance,
-    plan)``, and their ports folded, ``id -> Connector`` in tree order. ``planned.inside``
-    holds the ids of the components within planned instances."""
+def plan_subsystems(model: Component, components) -> tuple[dict, dict]:
+    """``(planned, folded)``: the instances among ``components`` (the model's, in tree
+    order) wired by their class's plan, ``id -> (instance, plan)``, and their ports
+    folded, ``id -> Connector`` in tree order. ``planned.inside`` holds the ids of the
+    components within planned instances."""
     from mechatron.compiler.flatten import _PLAIN_KEYS
     plans: dict[type, ClassPlan | None] = {}
     planned = _Planned()
-    inside = planned.inside
+    inside, where = planned.inside, planned.where
     folded: dict[int, Connector] = {}
-    for el in elements:             # parents first
-        if not isinstance(el, Component) or el is model:
+    for el in components:           # parents first
+        if el is model:
             continue
         parent = id(el._parent)
         if parent in planned or parent in inside:
@@ -75,33 +80,44 @@ def plan_subsystems(model: Component, elements) -> tuple[dict, dict]:
         if plan is None:
             continue
         children = el._children
-        if el.__dict__.keys() - _PLAIN_KEYS - children.keys():
-            continue                    # instance attributes: connections may differ
         if plan == 0:
-            plan = plans[cls] = _plan(el)
+            if el.__dict__.keys() - _PLAIN_KEYS - children.keys():
+                continue                # instance attributes: connections may differ
+            plan = plans[cls] = _plan(el, _PLAIN_KEYS | children.keys())
             if plan is None:
                 continue
+        elif not el.__dict__.keys() <= plan.keys:
+            continue                    # attributes or parts beyond the first instance's
         ports = [children[name] for name in plan.own]
-        if any(port._starts for port in ports):
+        if any(map(_STARTS, ports)):
             continue                    # a start value on a port: written out
         planned[id(el)] = (el, plan)
-        for port in ports:
+        planned.inner = planned.inner or plan.inner
+        for port, k in zip(ports, plan.own.values()):
             folded[id(port)] = port
+            where[id(port)] = (el, plan, k)
     return planned, folded
 
 
+_STARTS = attrgetter("_starts")
+
+
 class _Planned(dict):
-    """``id -> (instance, plan)``, with the ids of the components within them."""
+    """``id -> (instance, plan)``, with the ids of the components within them and where
+    each folded port's set is: ``id(port) -> (instance, plan, set index)``."""
 
     def __init__(self):
         super().__init__()
         self.inside: set[int] = set()
+        self.where: dict[int, tuple] = {}
+        self.inner = False      # whether a plan has a set inside only
 
 
-def _plan(el) -> ClassPlan | None:
-    """The plan of ``el``'s class read from ``el`` (None if the class does not qualify).
-    ``equations()`` is called before symbols are bound: reading a variable or parameter
-    raises, which marks the class as not qualifying."""
+def _plan(el, keys: frozenset) -> ClassPlan | None:
+    """The plan of ``el``'s class read from ``el`` (None if the class does not qualify);
+    ``keys``: what the ``__dict__`` of an instance wired by it may hold. ``equations()``
+    is called before symbols are bound: reading a variable or parameter raises, which
+    marks the class as not qualifying."""
     from mechatron.compiler.flatten import _as_equations, _own_methods
     children = el._children
     ports = [n for n, c in children.items() if isinstance(c, Connector)]
@@ -148,7 +164,7 @@ def _plan(el) -> ClassPlan | None:
                for c in part._children.values()):
             return None                 # a port left open inside: reported as before
     own = {name: own[name] for name in ports if name in own}   # declaration order
-    return ClassPlan(own, sets, has_equations)
+    return ClassPlan(own, sets, has_equations, keys)
 
 
 class Joining:
@@ -168,13 +184,9 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
     """The nodes of the model: its connection sets ``sets`` (from every connection not
     wired by a plan) with each folded port replaced by its set inside, and the sets
     inside the planned instances that no outside port joins."""
-    where: dict[int, tuple] = {}        # id(folded port) -> (instance, plan, set index)
-    for el, plan in planned.values():
-        children = el._children
-        for name, k in plan.own.items():
-            port = children[name]
-            if id(port) in folded:
-                where[id(port)] = (el, plan, k)
+    where = planned.where          # id(folded port) -> (instance, plan, set index)
+    if len(where) != len(folded):       # a port read by an equation is a member itself
+        where = {pid: at for pid, at in where.items() if pid in folded}
     out = Joining()
     expand = _Expansion(where, out)
     groups = out.groups
@@ -196,22 +208,31 @@ def join_planned(sets, planned: dict, folded: dict) -> Joining:
             _add(out, node, ports)
         else:                   # no folded port inside it: the set as it is
             groups.append(members)
-    for el, plan in planned.values():
-        children = el._children
-        for owner, names_list in plan.sets:
-            if owner is None:           # a node inside the subsystem only
+    # the sets no outside node took in: the sets inside only, and those of ports read
+    # by an equation or open outside, instance by instance, parents first (a nested
+    # port is joined with its parent's set before its own instance is reached); with
+    # no set inside only, the ports left are all there is to visit
+    joined = expand.joined_outside
+    if planned.inner:
+        todo = ((el, plan, k) for el, plan in planned.values()
+                for k in range(len(plan.sets)))
+    else:
+        todo = (at for pid, at in planned.where.items() if pid not in joined)
+    for el, plan, k in todo:
+        owner, names_list = plan.sets[k]
+        if owner is None:               # a node inside the subsystem only
+            node, ports = expand.members_of(el, names_list)
+        else:
+            port = el._children[owner]
+            if id(port) not in where:   # read by an equation: a member itself
                 node, ports = expand.members_of(el, names_list)
-            else:
-                port = children[owner]
-                if id(port) not in where:       # read by an equation: a member itself
-                    node, ports = expand.members_of(el, names_list)
-                    node.insert(0, Member(port, True))
-                elif id(port) in expand.joined_outside:
-                    continue
-                else:                   # open outside: nothing flows through it
-                    node, ports = expand.inner_of(port)
-                    node, ports = list(node), list(ports)
-            _add(out, node, ports)
+                node.insert(0, Member(port, True))
+            elif id(port) in joined:
+                continue
+            else:                       # open outside: nothing flows through it
+                node, ports = expand.inner_of(port)
+                node, ports = list(node), list(ports)
+        _add(out, node, ports)
     groups.sort(key=lambda g: _order(g[0]))
     return out
 
