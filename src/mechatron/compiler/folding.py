@@ -47,7 +47,7 @@ class ClassPlan:
 
     __slots__ = ("own", "sets", "has_time_scales", "inner", "keys")
 
-    def __init__(self, own, sets, has_time_scales, keys=frozenset()):
+    def __init__(self, own, sets, has_time_scales, keys):
         self.own = own                  # own port name -> index of its set
         self.sets = sets                # [(own port name | None, [names])]
         self.has_time_scales = has_time_scales
@@ -80,14 +80,15 @@ def plan_subsystems(model: Component, components) -> tuple[dict, dict]:
         if plan is None:
             continue
         children = el._children
+        # an instance with attributes of its own may connect differently; the plan is
+        # read off the first instance without, and holds the keys it allows
+        keys = _PLAIN_KEYS | children.keys() if plan == 0 else plan.keys
+        if not el.__dict__.keys() <= keys:
+            continue
         if plan == 0:
-            if el.__dict__.keys() - _PLAIN_KEYS - children.keys():
-                continue                # instance attributes: connections may differ
-            plan = plans[cls] = _plan(el, _PLAIN_KEYS | children.keys())
+            plan = plans[cls] = _plan(el, keys)
             if plan is None:
                 continue
-        elif not el.__dict__.keys() <= plan.keys:
-            continue                    # attributes or parts beyond the first instance's
         ports = [children[name] for name in plan.own]
         if any(map(_STARTS, ports)):
             continue                    # a start value on a port: written out

@@ -620,11 +620,11 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
     only, not the variables of other blocks that appear in ``e``: the blocks are
     coloured so that no equation holds the variable of another block of its colour
     (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
-    takes one substitution (in pieces on a long colour, `_zeroed`). Returns ``(X, solved, exprs, at)``: the variables of all
-    the blocks stacked, the rows of X solved (colour by colour), the expressions of
-    those rows in pieces (one per colour, to be stacked once by the caller), and
-    ``{e: place among the solved}``; the others (not linear in their variable) are left
-    to the equation-by-equation path.
+    takes one substitution (in pieces on a long colour, `_zeroed`). Returns ``(X,
+    solved, exprs, at)``: the variables of all the blocks stacked, the rows of X solved
+    (colour by colour), the expressions of those rows in pieces (one per colour, to be
+    stacked once by the caller), and ``{e: place among the solved}``; the others (not
+    linear in their variable) are left to the equation-by-equation path.
 
     ``given = (R, V, J, S, entries)``: the residuals and variables stacked, the
     Jacobian of R in V, its sparsity and the rows and columns of its entries (column by
