@@ -21,6 +21,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
+from mechatron.compiler.nodes import physical_nodes
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
 from mechatron.core.connections import connection_sets, is_driver, port_key
 from mechatron.core.context import BuildContext
@@ -2259,6 +2260,14 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
             ok.append(b)
         if len(ok) > 1:
             joined.append((writer, ok))
+    bulk = None if planned or tried else physical_nodes(flat, joined)
+    if bulk is not None:
+        # every set physical, formed on arrays: the same records as set by set below
+        ids, outside = bulk.port_ids, bulk.outside
+        _unconnected(flat, model, elements, set(ids[~outside].tolist()), set(),
+                     set(ids[outside].tolist()), problems)
+        _check_references(bulk.ports, np.diff(bulk.ptr).tolist(), problems)
+        return
     sets = connection_sets(joined)
     flow_sums: list = []
     for cset in sets:
@@ -2279,18 +2288,19 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     else:
         nodes = [cset.members for cset in sets if not cset.is_signal]
     _flow_sums(flat, flow_sums)
-    # what inside_connected(sets) | tried holds (port_key of each port connected from
-    # outside its component), connectors by id and signals by key; and the ports
-    # wired inside their own component
+    # the ports connected from outside their component (inside_connected(sets) | tried:
+    # connectors by id, signals by port_key), and the connectors wired inside their own
+    # component, by id
     connected_ports: set[int] = set()
     connected: set[tuple] = set()
-    wired_inside: set[tuple] = set()
+    wired_inside: set[int] = set()
     for cset in sets:
         for m in cset.members:
-            if m.outside:
-                wired_inside.add(port_key(m.port))
-            elif isinstance(m.port, SignalRef):
-                connected.add(port_key(m.port))
+            if isinstance(m.port, SignalRef):
+                if not m.outside:
+                    connected.add(port_key(m.port))
+            elif m.outside:
+                wired_inside.add(id(m.port))
             else:
                 connected_ports.add(id(m.port))
     for key in tried:
@@ -2298,6 +2308,20 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
             connected_ports.add(key[1])
         else:
             connected.add(key)
+    _unconnected(flat, model, elements, connected_ports, connected, wired_inside, problems,
+                 planned, folded)
+    _check_references([m.port for members in nodes for m in members],
+                      list(map(len, nodes)), problems)
+
+
+def _unconnected(flat: FlatModel, model, elements, connected_ports: set[int],
+                 connected: set[tuple], wired_inside: set[int], problems, planned=None,
+                 folded=None) -> None:
+    """Each port left open: an open terminal (`_open_port`) if it is the model's own or a
+    subsystem's wired inside (``wired_inside``, by id), else an error; each signal input
+    of a part that nothing drives, an error. ``connected_ports`` holds the ids of the
+    connectors connected from outside their component, ``connected`` the `port_key` of
+    such signals."""
     for el in elements:
         if isinstance(el, Connector):
             if id(el) in connected_ports:
@@ -2308,7 +2332,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
             if planned and id(owner) in planned:
                 _open_port(flat, el)    # a planned port an equation reads, open outside
                 continue
-            if el._parent is model or port_key(el) in wired_inside:
+            if el._parent is model or id(el) in wired_inside:
                 # a port of the model, or of a subsystem wired to its parts, left open
                 # outside: nothing flows through it
                 _open_port(flat, el)
@@ -2321,7 +2345,6 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
                 if port_key(SignalRef(el, key)) not in connected:
                     problems.append(f"signal input '{_join(el.path, key)}' is not "
                                     "connected. Connect a source, e.g. blocks.Constant.")
-    _check_references(nodes, problems)
 
 
 def _reaches_inside(connects, planned) -> bool:
@@ -2635,9 +2658,10 @@ def _port_variables(cls) -> tuple:
 
 
 def _flow_sums(flat: FlatModel, flow_sums) -> None:
-    """The through-variable sums of all sets of three or more members, as one sparse
-    signed incidence matrix times the vector of their variables (three CasADi calls in
-    all, not one per term), kept as one column (`_SumEquation`)."""
+    """The through-variable sums of all sets of three or more members (``(terms, origin,
+    uniform)`` each, a term ``(variable, sign)``, a variable by number or by path), as one
+    sparse signed incidence matrix times the vector of their variables (`_sum_equations`):
+    three CasADi calls in all, not one per term."""
     if not flow_sums:
         return
     index: dict = {}        # each variable (by number or by path) -> its column in A
@@ -2647,20 +2671,31 @@ def _flow_sums(flat: FlatModel, flow_sums) -> None:
             rows.append(r)
             cols.append(index.setdefault(name, len(index)))
             vals.append(sign)
-    A = ca.DM.triplet(rows, cols, ca.DM(vals), len(flow_sums), len(index))
     number = flat.variable_rows()
-    x = flat.stack_rows([name if type(name) is int else number[name] for name in index])
-    sums = ca.mtimes(A, x)
+    _sum_equations(flat, np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64),
+                   np.asarray(vals, dtype=float),
+                   [name if type(name) is int else number[name] for name in index],
+                   [origin for _, origin, _ in flow_sums],
+                   [uniform for _, _, uniform in flow_sums])
+
+
+def _sum_equations(flat: FlatModel, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray,
+                   variables: list[int], origins: list, uniform: list[bool]) -> None:
+    """The flow sums as `_SumEquation` rows of one column ``A x``: sum ``rows[k]`` holds
+    ``vals[k]`` times variable ``variables[cols[k]]`` (a row of the model's variables),
+    each sum's origin and whether its terms are of one class (``uniform``)."""
+    n = len(origins)
+    A = ca.DM.triplet(rows.tolist(), cols.tolist(), ca.DM(vals.tolist()), n, len(variables))
+    sums = ca.mtimes(A, flat.stack_rows(variables))
     # the terms left in each sum (a variable met twice with opposite signs cancels): a
     # sum of three or more is no alias; the others are read off their residuals
-    key = np.asarray(rows, dtype=np.int64) * max(len(index), 1) + np.asarray(cols)
-    uniq, inverse = np.unique(key, return_inverse=True)
-    total = np.bincount(inverse, weights=np.asarray(vals, dtype=float))
-    terms = np.bincount(uniq[total != 0] // max(len(index), 1),
-                        minlength=len(flow_sums)).tolist()
-    flat.equations += [_SumEquation(sums, r, origin, _NO_ALIAS if terms[r] > 2 else None,
-                                    uniform)
-                       for r, (_, origin, uniform) in enumerate(flow_sums)]
+    width = max(len(variables), 1)
+    uniq, inverse = np.unique(rows * width + cols, return_inverse=True)
+    total = np.bincount(inverse, weights=vals)
+    terms = np.bincount(uniq[total != 0] // width, minlength=n).tolist()
+    flat.equations += [_SumEquation(sums, r, origin, _NO_ALIAS if count > 2 else None, same)
+                       for r, (origin, same, count) in enumerate(zip(origins, uniform,
+                                                                      terms))]
 
 
 _DOMAINS: dict = {}
@@ -2673,54 +2708,58 @@ def _domain_id(cls) -> int:
     return id(_DOMAINS.setdefault(cls.domain, cls.domain))
 
 
-def _check_references(nodes, problems) -> None:
+def _check_references(ports: list, sizes: list[int], problems) -> None:
     """Every network of a domain that needs a reference must contain one. A network joins
-    the physical nodes ``nodes`` (lists of members; a subsystem's port is one node inside
-    and outside) that meet on a component: the ports of one domain on a component are
-    one network (a resistor's two pins; a motor's two pins, apart from its shaft).
+    the physical nodes (``ports``: the members' ports, node after node, ``sizes[k]`` of
+    node ``k``; a subsystem's port is one node inside and outside) that meet on a
+    component: the ports of one domain on a component are one network (a resistor's two
+    pins; a motor's two pins, apart from its shaft).
 
     Read off the nodes' members alone, not by a walk over every element: each member's
     component and domain get a number, and the networks are the connected components of
     the graph that joins each node to those numbers (a port that is no component's is a
     network of its own). A network is grounded when one of its members belongs to a
     reference component; the others are reported in the order of their first node."""
-    if not nodes:
+    if not ports:
         return
-    number: dict = {}       # (id of a component, its domain), or id(port) -> number
-    at: list[int] = []      # each member's number, node by node
-    grounded: list[bool] = []
-    sizes: list[int] = []
-    for members in nodes:
-        reference = False
-        for m in members:
-            port = m.port
-            owner = port._parent
-            if isinstance(owner, Component):
-                key = (id(owner), _domain_id(type(port)))
-                reference = reference or owner._reference
-            else:
-                key = id(port)
-                reference = reference or (owner is not None and owner._reference)
-            k = number.get(key)
-            if k is None:
-                k = number[key] = len(number)
-            at.append(k)
-        grounded.append(reference)
-        sizes.append(len(members))
-    if all(grounded):
+    owners = list(map(_PARENT_OF, ports))
+    types = list(map(type, ports))
+    is_part = np.fromiter(map(isinstance, owners, repeat(Component)), dtype=bool,
+                          count=len(owners))
+    # a member's key: its component and its domain's number, or (a port that is no
+    # component's) the port itself; ids are addresses below 2**48, the keys stay in
+    # 64 bits
+    numbers: dict[int, int] = {}
+    domain_of = {cls: numbers.setdefault(_domain_id(cls), len(numbers))
+                 for cls in dict.fromkeys(types)}
+    width = len(numbers) + 1
+    domain = np.fromiter(map(domain_of.__getitem__, types), dtype=np.int64,
+                         count=len(types))
+    key = np.where(is_part,
+                   np.fromiter(map(id, owners), dtype=np.int64, count=len(owners)) * width
+                   + domain,
+                   np.fromiter(map(id, ports), dtype=np.int64, count=len(ports)) * width
+                   + width - 1)
+    _, at = np.unique(key, return_inverse=True)
+    reference = np.fromiter(map(getattr, owners, repeat("_reference"), repeat(False)),
+                            dtype=bool, count=len(owners))
+    sizes_a = np.asarray(sizes, dtype=np.intp)
+    n = len(sizes_a)
+    node_of = np.repeat(np.arange(n), sizes_a)
+    grounded = np.zeros(n, dtype=bool)
+    grounded[node_of[reference]] = True
+    if grounded.all():
         return
-    n = len(nodes)
-    node_of = np.repeat(np.arange(n), sizes)
-    graph = sparse.coo_matrix((np.ones(len(at), dtype=np.int8),
-                               (node_of, n + np.asarray(at, dtype=np.int64))),
-                              shape=(n + len(number),) * 2)
+    graph = sparse.coo_matrix((np.ones(len(at), dtype=np.int8), (node_of, n + at)),
+                              shape=(n + int(at.max()) + 1,) * 2)
     _, label = csgraph.connected_components(graph, directed=False)
     label = label[:n]
     has_reference = np.zeros(label.max() + 1, dtype=bool)
-    has_reference[label[np.asarray(grounded)]] = True
+    has_reference[label[grounded]] = True
+    ptr = _offsets(sizes_a).tolist()
     networks: dict[int, list] = {}      # in the order of their first node
     for i in np.flatnonzero(~has_reference[label]).tolist():
-        networks.setdefault(int(label[i]), []).extend([m.port for m in nodes[i]])
+        networks.setdefault(int(label[i]), []).extend(ports[ptr[i]:ptr[i + 1]])
     for plist in networks.values():
         domain = type(plist[0]).domain
         if domain is None or not domain.needs_reference:
@@ -2728,6 +2767,9 @@ def _check_references(nodes, problems) -> None:
         owners = sorted({p._parent.path for p in plist if p._parent is not None})
         problems.append(f"{domain.name} network of {', '.join(owners)} has no reference. "
                         f"{domain.hint or 'Add a reference component to it.'}")
+
+
+_PARENT_OF = attrgetter("_parent")
 
 
 # -- hybrid declarations (mt.Discrete, initial_equations); kept apart from the passes above

@@ -1,0 +1,218 @@
+"""The physical connection sets of a model formed on arrays (part of pass 2, connections).
+
+When every connect of a model joins ports (no signals), every port is bound in bulk and no
+subsystem is wired by its class's plan (:mod:`mechatron.compiler.folding`), the sets are
+the connected components of the graph of the connects' elements (a port with its side,
+:mod:`mechatron.core.connections`), ordered as `connection_sets` orders them: members by
+path, the inside element first, sets by their first member. Their records, aliases and
+flow sums are then read off arrays of the members' rows, and the flat model is the same
+as set by set (`flatten._physical_set`). Python runs per member only to read each port's
+attributes, once; on 10^5 sets the per-set calls cost twice as much per equation as on
+10^3 (issue 17).
+"""
+
+from __future__ import annotations
+
+from itertools import chain, repeat
+from operator import attrgetter, itemgetter
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+
+from mechatron.core.component import Connector
+
+__all__ = ["physical_nodes"]
+
+_PARENT = attrgetter("_parent")
+_PATH = attrgetter("_path_cache")       # set by flatten's walk
+_SYMS = attrgetter("_syms")
+_ROW = attrgetter("row")
+
+
+class Nodes:
+    """The physical connection sets, members in order: ``ports[k]``, ``outside[k]``,
+    ``paths[k]`` and ``port_ids[k]`` of member ``k``; set ``s`` holds members
+    ``ptr[s]:ptr[s + 1]``."""
+
+    __slots__ = ("ports", "outside", "paths", "port_ids", "ptr")
+
+    def __init__(self, ports: list, outside: np.ndarray, paths: list,
+                 port_ids: np.ndarray, ptr: np.ndarray):
+        self.ports, self.outside, self.paths = ports, outside, paths
+        self.port_ids, self.ptr = port_ids, ptr
+
+
+def physical_nodes(flat, joined: list) -> Nodes | None:
+    """Record the connection sets of ``joined`` (``(writer, ports)`` of each connect) in
+    ``flat`` as `flatten._connections` does set by set: the sets, and the aliases and
+    flow sums of each; return them. None, having changed nothing, when the model is not
+    one this path reads (a signal, a port without rows, a member of a class without the
+    first member's variables): the caller then goes set by set."""
+    from mechatron.compiler.flatten import _ColumnSyms
+
+    writers = list(map(itemgetter(0), joined))
+    lists = list(map(itemgetter(1), joined))
+    refs = list(chain.from_iterable(lists))
+    if not refs or not all(issubclass(t, Connector) for t in set(map(type, refs))):
+        return None
+    counts = np.fromiter(map(len, lists), dtype=np.intp, count=len(lists))
+    n_ref = len(refs)
+    ids = np.fromiter(map(id, refs), dtype=np.int64, count=n_ref)
+    # an element is a port with its side: outside when the connect's writer owns it
+    outside = np.fromiter(map(id, map(_PARENT, refs)), dtype=np.int64, count=n_ref) == \
+        np.repeat(np.fromiter(map(id, writers), dtype=np.int64, count=len(writers)),
+                  counts)
+    _, first, inverse = np.unique(ids * 2 + outside, return_index=True,
+                                  return_inverse=True)
+    m = len(first)
+    first_list = first.tolist()
+    ports = list(map(refs.__getitem__, first_list))
+    syms = list(map(_SYMS, ports))
+    if any(type(s) is not _ColumnSyms for s in syms):
+        return None                     # a port bound one by one: rows by name
+    rows = np.fromiter(map(_ROW, syms), dtype=np.int64, count=m)
+    if rows.min() < 0:
+        return None
+    try:
+        paths = list(map(_PATH, ports))
+    except AttributeError:              # a port outside the walked tree
+        return None
+    if None in paths:
+        return None
+    side = outside[first]
+    # each element joined to the first of its connect: the sets are the components
+    start = np.repeat(_starts(counts), counts)
+    graph = sparse.coo_matrix((np.ones(n_ref, dtype=np.int8), (inverse, inverse[start])),
+                              shape=(m, m))
+    _, label = csgraph.connected_components(graph, directed=False)
+    # members by path, the inside element of a port first (the elements are numbered by
+    # port, inside before outside, and the sort is stable); sets by their first member
+    order = sorted(range(m), key=paths.__getitem__)
+    rank = np.empty(m, dtype=np.int64)
+    rank[order] = np.arange(m)
+    by_rank = label[order]
+    _, seen = np.unique(by_rank, return_index=True)
+    set_rank = np.empty(len(seen), dtype=np.int64)
+    set_rank[by_rank[np.sort(seen)]] = np.arange(len(seen))
+    of_member = set_rank[label]
+    mem = np.lexsort((rank, of_member))
+    ptr = _starts(np.bincount(of_member, minlength=len(seen)), total=True)
+    in_order = mem.tolist()
+    nodes = Nodes(list(map(ports.__getitem__, in_order)), side[mem],
+                  list(map(paths.__getitem__, in_order)), ids[first][mem], ptr)
+    return nodes if _record(flat, nodes, rows[mem]) else None
+
+
+def _starts(counts: np.ndarray, total: bool = False) -> np.ndarray:
+    """The first index of each of consecutive segments of ``counts`` entries (and the
+    end of the last with ``total``)."""
+    ends = np.cumsum(counts)
+    starts = ends - counts
+    return np.append(starts, ends[-1] if len(ends) else 0) if total else starts
+
+
+def _record(flat, nodes: Nodes, rows: np.ndarray) -> bool:
+    """The sets' records, aliases and flow sums (see `physical_nodes`) from the members'
+    rows; False, having changed nothing, if a member's class lacks a variable of its
+    set's first member's class."""
+    from mechatron.compiler.flatten import _binding_plan, _port_variables
+
+    ports, ptr = nodes.ports, nodes.ptr
+    n_set = len(ptr) - 1
+    types = list(map(type, ports))
+    classes = list(dict.fromkeys(types))
+    number = {cls: k for k, cls in enumerate(classes)}
+    kind = np.fromiter(map(number.__getitem__, types), dtype=np.intp, count=len(types))
+    heads = ptr[:-1]
+    head_kind = kind[heads]
+    # each key's place among each class's variables (-1: the class has none of that name)
+    keys = list(dict.fromkeys(chain.from_iterable(
+        chain(*_port_variables(classes[k])) for k in np.unique(head_kind).tolist())))
+    key_no = {key: j for j, key in enumerate(keys)}
+    place = np.full((len(classes), len(keys)), -1, dtype=np.int64)
+    for cls, k in number.items():
+        offsets = _binding_plan(cls)[4]
+        for key, j in key_no.items():
+            place[k, j] = offsets.get(key, -1)
+    set_of = np.repeat(np.arange(n_set), np.diff(ptr))
+    size = np.diff(ptr)
+    sign = np.where(nodes.outside, -1.0, 1.0)
+    # a member other than the first's port (a port met on both sides is one node)
+    port_ids = nodes.port_ids
+    other = port_ids != port_ids[heads][set_of]
+    n_other = np.bincount(set_of, weights=other, minlength=n_set).astype(np.intp)
+    uniform = np.minimum.reduceat(kind, heads) == np.maximum.reduceat(kind, heads) \
+        if n_set else np.zeros(0, dtype=bool)
+    paths = nodes.paths
+    origins = ["connect(" + ", ".join(paths[a:b]) + ")"
+               for a, b in zip(ptr[:-1].tolist(), ptr[1:].tolist())]
+    # the aliases (set, key, member) and flow sums (set, key) of each class of first member
+    found = []          # (sets, key's places, members, alias rows, target rows, scales)
+    sums = []           # (sets, key's places, members, rows, key) of the terms
+    for k in np.unique(head_kind).tolist():
+        across, through = _port_variables(classes[k])
+        in_class = head_kind[set_of] == k
+        for q, key in enumerate(across + through):
+            j = key_no[key]
+            var = rows + place[kind, j]
+            if (place[kind[in_class], j] < 0).any():
+                return False            # a member without the variable: by path
+            head_var = var[heads][set_of]
+            if q < len(across):
+                pick = np.flatnonzero(in_class & other)
+                found.append((set_of[pick], np.full(len(pick), q), pick, var[pick],
+                              head_var[pick], np.ones(len(pick))))
+                continue
+            pair = (size == 2) & (n_other > 0)
+            pick = np.flatnonzero(in_class & other & pair[set_of])
+            found.append((set_of[pick], np.full(len(pick), q), pick, var[pick],
+                          head_var[pick], -sign[heads][set_of[pick]] * sign[pick]))
+            pick = np.flatnonzero(in_class & ~pair[set_of])
+            sums.append((set_of[pick], np.full(len(pick), q), pick, var[pick], key))
+    flat.connection_sets += _set_records(nodes, types)
+    if found:
+        s, q, at, a, b, scale = (np.concatenate(x) for x in zip(*found))
+        order = np.lexsort((at, q, s))
+        flat.aliases += list(zip(a[order].tolist(), b[order].tolist(),
+                                 scale[order].tolist(),
+                                 map(origins.__getitem__, s[order].tolist())))
+    if sums:
+        _sums(flat, sums, sign, origins, uniform)
+    return True
+
+
+def _sums(flat, parts: list, sign: np.ndarray, origins: list, uniform: np.ndarray) -> None:
+    """The flow sums of the sets that are no pair: ``parts`` holds, for each class of
+    first member and through key, the terms' sets, key's place among the class's keys,
+    members and variables, and the key; one sum per set and key, ordered as set by set
+    (`flatten._sum_equations`)."""
+    from mechatron.compiler.flatten import _sum_equations
+
+    s, q, at, var = (np.concatenate(x) for x in zip(*(p[:4] for p in parts)))
+    part = np.repeat(np.arange(len(parts)), [len(p[0]) for p in parts])
+    order = np.lexsort((at, q, s))
+    s, q, var, sign = s[order], q[order], var[order], sign[at[order]]
+    # a sum per (set, key), in order; its columns the variables by first appearance
+    new = np.ones(len(s), dtype=bool)
+    new[1:] = (s[1:] != s[:-1]) | (q[1:] != q[:-1])
+    row = np.cumsum(new) - 1
+    heads = np.flatnonzero(new)
+    variables, first, inverse = np.unique(var, return_index=True, return_inverse=True)
+    by_first = np.argsort(first, kind="stable")
+    column = np.empty(len(variables), dtype=np.int64)
+    column[by_first] = np.arange(len(variables))
+    keys = [parts[i][4] for i in part[order[heads]].tolist()]
+    sets = s[heads].tolist()
+    _sum_equations(flat, row, column[inverse], sign, variables[by_first].tolist(),
+                   [f"{origins[j]}: sum of {k} == 0" for j, k in zip(sets, keys)],
+                   uniform[sets].tolist())
+
+
+def _set_records(nodes: Nodes, types: list) -> list[list[tuple]]:
+    """`FlatModel.connection_sets` of the sets: each member's path, domain, and False
+    (no signal drives a physical set)."""
+    domain = {cls: cls.domain for cls in set(types)}
+    members = list(zip(nodes.paths, map(domain.__getitem__, types), repeat(False)))
+    ptr = nodes.ptr.tolist()
+    return [members[a:b] for a, b in zip(ptr[:-1], ptr[1:])]

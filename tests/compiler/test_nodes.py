@@ -1,0 +1,191 @@
+"""Physical connection sets formed on arrays (mechatron.compiler.nodes): the same flat
+model as set by set (`flatten._connections` without it), on ladders and chains written
+in any order, subsystems wired connect by connect (outside elements), connector classes
+mixed in one node, open ports and networks without a reference; and the models it does
+not read go set by set."""
+
+import random
+
+import pytest
+
+import mechatron as mt
+import mechatron.compiler.flatten as fl
+from mechatron.compiler.flatten import flatten
+from mechatron.errors import ModelError
+from mechatron.library import electrical as el
+from mechatron.library import translational as tr
+from tests.compiler.test_flatten_connections import rc
+from tests.compiler.test_folding import Short
+from tests.compiler.test_hierarchy import Stage
+
+
+def ladder(n: int, seed: int | None = None) -> mt.System:
+    """An RC ladder of ``n`` sections; with ``seed``, its parts added and its connects
+    written in a shuffled order, each connect's ports reversed at random."""
+    rng = random.Random(seed)
+    parts = [(f"r{k}", lambda: el.Resistor(R=1.0)) for k in range(n)] + \
+        [(f"c{k}", lambda: el.Capacitor(C=1e-3)) for k in range(n)]
+    if seed is not None:
+        rng.shuffle(parts)
+    m = mt.System("ladder")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    gnd = m.add("gnd", el.ElectricalReference())
+    got = {name: m.add(name, make()) for name, make in parts}
+    wires = [(src.n, gnd.port)]
+    node = src.p
+    for k in range(n):
+        r, c = got[f"r{k}"], got[f"c{k}"]
+        wires += [(node, r.p), (r.n, c.p), (c.n, gnd.port)]
+        node = r.n
+    if seed is not None:
+        rng.shuffle(wires)
+        wires = [w[::-1] if rng.random() < 0.5 else w for w in wires]
+    for a, b in wires:
+        m.connect(a, b)
+    return m
+
+
+def chain(n: int) -> mt.System:
+    """Masses linked by springs and dampers in parallel: nodes of three members (flow
+    sums) and a reference shared by the first spring and damper."""
+    m = mt.System("chain")
+    prev = m.add("ref", tr.TranslationalReference()).port
+    for k in range(n):
+        mass = m.add(f"m{k}", tr.Mass(m=1.0))
+        spring = m.add(f"k{k}", tr.TranslationalSpring(k=100.0))
+        damper = m.add(f"b{k}", tr.TranslationalDamper(b=1.0))
+        m.connect(mass.port, spring.A, damper.A)
+        m.connect(spring.B, damper.B, prev)
+        prev = mass.port
+    return m
+
+
+def stages(n: int) -> mt.System:
+    """A ladder of `Stage` subsystems: their ports are outside elements of their own
+    connects (with no plan, see `set_by_set`)."""
+    m = mt.System("stages")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    gnd = m.add("gnd", el.ElectricalReference())
+    m.connect(src.n, gnd.port)
+    node = src.p
+    for k in range(n):
+        s = m.add(f"s{k}", Stage(R=1.0 + k, C=1.0))
+        m.connect(node, s.p)
+        m.connect(s.gnd, gnd.port)
+        node = s.n
+    return m
+
+
+def loop() -> mt.System:
+    """Both pins of a wire on one node: a port inside and outside in one set."""
+    m = mt.System("loop")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    g = m.add("g", el.ElectricalReference())
+    w = m.add("a", Short())         # its pins first in their node
+    load = m.add("load", el.Resistor(R=2.0))
+    m.connect(src.p, w.p, w.n, load.p)
+    m.connect(src.n, g.port, load.n)
+    return m
+
+
+def reaching_in() -> mt.System:
+    """A connect of the parent reaching a part inside a subsystem and its port: that
+    port's inside and outside elements in one set, the first of it."""
+    m = mt.System("reach")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    g = m.add("g", el.ElectricalReference())
+    a = m.add("a", Stage(R=1.0, C=1.0))
+    m.connect(src.p, a.p)
+    m.connect(a.p, a.r.p)
+    m.connect(a.n, g.port, a.gnd, src.n)
+    return m
+
+
+def snapshot(flat) -> dict:
+    """What the connections pass leaves in a flat model, as text; the aliases also by
+    the names of their variables (they hold rows)."""
+    names = list(flat.variables)
+
+    def named(v):
+        return names[v] if type(v) is int else v
+
+    return {"aliases": [tuple(map(str, a)) for a in flat.aliases],
+            "aliases_by_name": [(named(a), named(b), s, o) for a, b, s, o in flat.aliases],
+            "equations": [(str(e.residual), str(e.origin), str(e.alias),
+                           getattr(e, "uniform", None)) for e in flat.equations],
+            "sets": [list(map(str, s)) for s in flat.connection_sets],
+            "variables": list(flat.variables)}
+
+
+def flattened(monkeypatch, build, *, bulk: bool) -> tuple[dict | None, bool]:
+    """(snapshot of ``build()`` flattened, whether the sets were formed on arrays); the
+    snapshot is None and the message is returned instead when flattening fails."""
+    used = []
+    original = fl.physical_nodes
+
+    def spy(flat, joined):
+        got = original(flat, joined) if bulk else None
+        used.append(got is not None)
+        return got
+
+    with monkeypatch.context() as m:
+        m.setattr(fl, "physical_nodes", spy)
+        m.setattr(fl, "plan_subsystems", lambda model, elements: ({}, {}))
+        try:
+            return snapshot(flatten(build())), any(used)
+        except ModelError as exc:
+            return str(exc), any(used)
+
+
+@pytest.mark.parametrize("build", [
+    lambda: ladder(7), lambda: ladder(7, seed=1), lambda: ladder(7, seed=2),
+    lambda: chain(5), lambda: stages(4), lambda: rc(True), lambda: rc(False), loop, reaching_in],
+    ids=["ladder", "ladder_shuffled_1", "ladder_shuffled_2", "chain", "stages",
+         "mixed_pins_node_of_three", "mixed_pins", "loop",
+         "port_inside_and_outside"])
+def test_sets_on_arrays_give_the_flat_model_of_set_by_set(build, monkeypatch):
+    bulk, used = flattened(monkeypatch, build, bulk=True)
+    plain, _ = flattened(monkeypatch, build, bulk=False)
+    assert used, "the sets were not formed on arrays"
+    assert bulk == plain
+
+
+def test_a_ladder_drawn_in_another_order_has_the_same_sets(monkeypatch):
+    ordered, _ = flattened(monkeypatch, lambda: ladder(6), bulk=True)
+    shuffled, _ = flattened(monkeypatch, lambda: ladder(6, seed=3), bulk=True)
+    assert shuffled["sets"] == ordered["sets"]
+    assert shuffled["aliases_by_name"] == ordered["aliases_by_name"]
+
+
+def open_port() -> mt.System:
+    m = ladder(2)
+    m.add("loose", el.Resistor(R=1.0))
+    m.connect(m.loose.p, m.r1.n)
+    return m
+
+
+def no_reference() -> mt.System:
+    m = mt.System("floating")
+    a = m.add("a", el.Resistor(R=1.0))
+    b = m.add("b", el.Capacitor(C=1.0))
+    m.connect(a.p, b.p)
+    m.connect(a.n, b.n)
+    return m
+
+
+@pytest.mark.parametrize("build, words", [
+    (open_port, "port 'loose.n' (electrical) is not connected"),
+    (no_reference, "has no reference")], ids=["open_port", "no_reference"])
+def test_problems_are_reported_as_set_by_set(build, words, monkeypatch):
+    bulk, used = flattened(monkeypatch, build, bulk=True)
+    plain, _ = flattened(monkeypatch, build, bulk=False)
+    assert used
+    assert isinstance(bulk, str) and words in bulk
+    assert bulk == plain
+
+
+def test_a_model_with_signals_goes_set_by_set(monkeypatch):
+    model = lambda: mt.models.get("dc_motor").build(variant="blocks")   # noqa: E731
+    bulk, used = flattened(monkeypatch, model, bulk=True)
+    assert not used
+    assert bulk == flattened(monkeypatch, model, bulk=False)[0]
