@@ -15,7 +15,7 @@ from mechatron.errors import ModelError
 from mechatron.library import electrical as el
 from mechatron.library import translational as tr
 from tests.compiler.test_flatten_connections import rc
-from tests.compiler.test_folding import Short
+from tests.compiler.test_folding import Short, deep_ladder, two_drives
 from tests.compiler.test_hierarchy import Stage
 
 
@@ -189,3 +189,31 @@ def test_a_model_with_signals_goes_set_by_set(monkeypatch):
     bulk, used = flattened(monkeypatch, model, bulk=True)
     assert not used
     assert bulk == flattened(monkeypatch, model, bulk=False)[0]
+
+
+def flattened_planned(monkeypatch, build, *, bulk: bool) -> tuple[dict, bool]:
+    """(snapshot of ``build()`` flattened with its subsystems planned, whether the joined
+    nodes were read on arrays)."""
+    used = []
+    original = fl.joined_nodes
+
+    def spy(flat, groups):
+        got = original(flat, groups) if bulk else False
+        used.append(got)
+        return got
+
+    with monkeypatch.context() as m:
+        m.setattr(fl, "joined_nodes", spy)
+        flat = flatten(build())
+    assert flat.folded, "no port was folded"
+    return snapshot(flat), any(used)
+
+
+@pytest.mark.parametrize("build", [lambda: stages(5), deep_ladder, two_drives],
+                         ids=["stages", "deep", "two_drives"])
+def test_joined_nodes_on_arrays_give_the_flat_model_of_set_by_set(build, monkeypatch):
+    """Subsystems wired by their plan: the nodes joined across their folded ports."""
+    bulk, used = flattened_planned(monkeypatch, build, bulk=True)
+    plain, _ = flattened_planned(monkeypatch, build, bulk=False)
+    assert used
+    assert bulk == plain

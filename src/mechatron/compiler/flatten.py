@@ -21,7 +21,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
-from mechatron.compiler.nodes import physical_nodes
+from mechatron.compiler.nodes import joined_nodes, physical_nodes
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
 from mechatron.core.connections import connection_sets, is_driver, port_key
 from mechatron.core.context import BuildContext
@@ -2282,8 +2282,9 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
     if planned:
         joining = join_planned(sets, planned, folded)
         nodes = joining.groups
-        for members in nodes:
-            _physical_set(flat, _Joined(members), flow_sums)
+        if not joined_nodes(flat, nodes):
+            for members in nodes:
+                _physical_set(flat, _Joined(members), flow_sums)
         _folded_variables(flat, folded, joining)
     else:
         nodes = [cset.members for cset in sets if not cset.is_signal]

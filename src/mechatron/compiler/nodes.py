@@ -4,11 +4,11 @@ When every connect of a model joins ports (no signals), every port is bound in b
 subsystem is wired by its class's plan (:mod:`mechatron.compiler.folding`), the sets are
 the connected components of the graph of the connects' elements (a port with its side,
 :mod:`mechatron.core.connections`), ordered as `connection_sets` orders them: members by
-path, the inside element first, sets by their first member. Their records, aliases and
-flow sums are then read off arrays of the members' rows, and the flat model is the same
-as set by set (`flatten._physical_set`). Python runs per member only to read each port's
-attributes, once; on 10^5 sets the per-set calls cost twice as much per equation as on
-10^3 (issue 17).
+path, the inside element first, sets by their first member (`physical_nodes`). Their
+records, aliases and flow sums are then read off arrays of the members' rows, for these
+sets as for the nodes joined across folded ports (`joined_nodes`), and the flat model is
+the same as set by set (`flatten._physical_set`): Python runs per member only to read
+each port's attributes, once, and per set only to write its origin.
 """
 
 from __future__ import annotations
@@ -22,12 +22,15 @@ from scipy.sparse import csgraph
 
 from mechatron.core.component import Connector
 
-__all__ = ["physical_nodes"]
+__all__ = ["physical_nodes", "joined_nodes"]
 
 _PARENT = attrgetter("_parent")
 _PATH = attrgetter("_path_cache")       # set by flatten's walk
 _SYMS = attrgetter("_syms")
 _ROW = attrgetter("row")
+_PORT = attrgetter("port")              # of a Member
+_OUTSIDE = attrgetter("outside")
+_MEMBER_PATH = attrgetter("path")
 
 
 class Nodes:
@@ -101,7 +104,36 @@ def physical_nodes(flat, joined: list) -> Nodes | None:
     in_order = mem.tolist()
     nodes = Nodes(list(map(ports.__getitem__, in_order)), side[mem],
                   list(map(paths.__getitem__, in_order)), ids[first][mem], ptr)
-    return nodes if _record(flat, nodes, rows[mem]) else None
+    if not _record(flat, nodes, rows[mem]):
+        return None
+    flat.connection_sets += _set_records(nodes)
+    return nodes
+
+
+def joined_nodes(flat, groups: list[list]) -> bool:
+    """The aliases and flow sums of the nodes ``groups`` (lists of `Member`, as
+    `folding.join_planned` forms them) recorded in ``flat`` as set by set; False, having
+    changed nothing, when a member's port was not bound in bulk or lacks a variable of
+    its node's first member's class."""
+    from mechatron.compiler.flatten import _ColumnSyms
+
+    members = list(chain.from_iterable(groups))
+    if not members:
+        return True
+    ports = list(map(_PORT, members))
+    syms = list(map(_SYMS, ports))
+    if any(type(s) is not _ColumnSyms for s in syms):
+        return False
+    rows = np.fromiter(map(_ROW, syms), dtype=np.int64, count=len(syms))
+    if rows.min() < 0:
+        return False
+    n = len(members)
+    nodes = Nodes(ports, np.fromiter(map(_OUTSIDE, members), dtype=bool, count=n),
+                  list(map(_MEMBER_PATH, members)),
+                  np.fromiter(map(id, ports), dtype=np.int64, count=n),
+                  _starts(np.fromiter(map(len, groups), dtype=np.intp, count=len(groups)),
+                          total=True))
+    return _record(flat, nodes, rows)
 
 
 def _starts(counts: np.ndarray, total: bool = False) -> np.ndarray:
@@ -170,7 +202,6 @@ def _record(flat, nodes: Nodes, rows: np.ndarray) -> bool:
                           head_var[pick], -sign[heads][set_of[pick]] * sign[pick]))
             pick = np.flatnonzero(in_class & ~pair[set_of])
             sums.append((set_of[pick], np.full(len(pick), q), pick, var[pick], key))
-    flat.connection_sets += _set_records(nodes, types)
     if found:
         s, q, at, a, b, scale = (np.concatenate(x) for x in zip(*found))
         order = np.lexsort((at, q, s))
@@ -209,9 +240,10 @@ def _sums(flat, parts: list, sign: np.ndarray, origins: list, uniform: np.ndarra
                    uniform[sets].tolist())
 
 
-def _set_records(nodes: Nodes, types: list) -> list[list[tuple]]:
+def _set_records(nodes: Nodes) -> list[list[tuple]]:
     """`FlatModel.connection_sets` of the sets: each member's path, domain, and False
     (no signal drives a physical set)."""
+    types = list(map(type, nodes.ports))
     domain = {cls: cls.domain for cls in set(types)}
     members = list(zip(nodes.paths, map(domain.__getitem__, types), repeat(False)))
     ptr = nodes.ptr.tolist()
