@@ -2728,20 +2728,18 @@ def _check_references(ports: list, sizes: list[int], problems) -> None:
     is_part = np.fromiter(map(isinstance, owners, repeat(Component)), dtype=bool,
                           count=len(owners))
     # a member's key: its component and its domain's number, or (a port that is no
-    # component's) the port itself; ids are addresses below 2**48, the keys stay in
-    # 64 bits
+    # component's) the port itself, each object numbered first
     numbers: dict[int, int] = {}
     domain_of = {cls: numbers.setdefault(_domain_id(cls), len(numbers))
                  for cls in dict.fromkeys(types)}
     width = len(numbers) + 1
     domain = np.fromiter(map(domain_of.__getitem__, types), dtype=np.int64,
                          count=len(types))
-    key = np.where(is_part,
-                   np.fromiter(map(id, owners), dtype=np.int64, count=len(owners)) * width
-                   + domain,
-                   np.fromiter(map(id, ports), dtype=np.int64, count=len(ports)) * width
-                   + width - 1)
-    _, at = np.unique(key, return_inverse=True)
+    _, obj = np.unique(np.where(
+        is_part, np.fromiter(map(id, owners), dtype=np.int64, count=len(owners)),
+        np.fromiter(map(id, ports), dtype=np.int64, count=len(ports))), return_inverse=True)
+    _, at = np.unique(obj * width + np.where(is_part, domain, width - 1),
+                      return_inverse=True)
     reference = np.fromiter(map(getattr, owners, repeat("_reference"), repeat(False)),
                             dtype=bool, count=len(owners))
     sizes_a = np.asarray(sizes, dtype=np.intp)
