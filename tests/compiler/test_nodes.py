@@ -1,8 +1,9 @@
 """Physical connection sets formed on arrays (mechatron.compiler.nodes): the same flat
 model as set by set (`flatten._connections` without it), on ladders and chains written
 in any order, subsystems wired connect by connect (outside elements), connector classes
-mixed in one node, open ports and networks without a reference; and the models it does
-not read go set by set."""
+mixed in one node, a port inside and outside in one set, open ports and networks
+without a reference, and the nodes joined across folded subsystem ports; the models it
+does not read go set by set."""
 
 import random
 
@@ -62,7 +63,7 @@ def chain(n: int) -> mt.System:
 
 def stages(n: int) -> mt.System:
     """A ladder of `Stage` subsystems: their ports are outside elements of their own
-    connects (with no plan, see `set_by_set`)."""
+    connects when flattened without plans (`flattened`), folded with them."""
     m = mt.System("stages")
     src = m.add("src", el.DCVoltageSource(V=1.0))
     gnd = m.add("gnd", el.ElectricalReference())
