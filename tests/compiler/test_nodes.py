@@ -2,8 +2,9 @@
 model as set by set (`flatten._connections` without it), on ladders and chains written
 in any order, subsystems wired connect by connect (outside elements), connector classes
 mixed in one node, a port inside and outside in one set, open ports and networks
-without a reference, and the nodes joined across folded subsystem ports; the models it
-does not read go set by set."""
+without a reference, database models whose signal sets take their places among them,
+and the nodes joined across folded subsystem ports; a model of signals alone goes set
+by set."""
 
 import random
 
@@ -124,8 +125,8 @@ def flattened(monkeypatch, build, *, bulk: bool) -> tuple[dict | None, bool]:
     used = []
     original = fl.physical_nodes
 
-    def spy(flat, joined):
-        got = original(flat, joined) if bulk else None
+    def spy(flat, joined, *signals):
+        got = original(flat, joined, *signals) if bulk else None
         used.append(got is not None)
         return got
 
@@ -185,10 +186,18 @@ def test_problems_are_reported_as_set_by_set(build, words, monkeypatch):
     assert bulk == plain
 
 
-def test_a_model_with_signals_goes_set_by_set(monkeypatch):
-    model = lambda: mt.models.get("dc_motor").build(variant="blocks")   # noqa: E731
+@pytest.mark.parametrize("name, variant", [
+    ("dc_motor", "inputs"), ("dc_motor_pwm", "switched"), ("bldc_motor", "acausal"),
+    ("buck_converter", "switched"), ("hydraulic_cylinder", "acausal"),
+    ("servo_encoder", "acausal"), ("two_axis", "inputs")])
+def test_signal_sets_take_their_places_among_the_sets_on_arrays(name, variant,
+                                                                  monkeypatch):
+    """A model with signals: its physical sets formed on arrays, its signal sets set by
+    set in their places (the sets, their aliases and problems in the same order)."""
+    model = lambda: mt.models.get(name).build(variant=variant)    # noqa: E731
     bulk, used = flattened(monkeypatch, model, bulk=True)
-    assert not used
+    assert used
+    assert any("signal" in str(s).lower() for s in bulk["sets"])
     assert bulk == flattened(monkeypatch, model, bulk=False)[0]
 
 
@@ -218,3 +227,10 @@ def test_joined_nodes_on_arrays_give_the_flat_model_of_set_by_set(build, monkeyp
     plain, _ = flattened_planned(monkeypatch, build, bulk=False)
     assert used
     assert bulk == plain
+
+
+def test_a_model_of_signals_alone_goes_set_by_set(monkeypatch):
+    model = lambda: mt.models.get("dc_motor").build(variant="blocks")   # noqa: E731
+    bulk, used = flattened(monkeypatch, model, bulk=True)
+    assert not used
+    assert bulk == flattened(monkeypatch, model, bulk=False)[0]

@@ -2260,13 +2260,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
             ok.append(b)
         if len(ok) > 1:
             joined.append((writer, ok))
-    bulk = None if planned or tried else physical_nodes(flat, joined)
-    if bulk is not None:
-        # every set physical, formed on arrays: the same records as set by set below
-        ids, outside = bulk.port_ids, bulk.outside
-        _unconnected(flat, model, elements, set(ids[~outside].tolist()), set(),
-                     set(ids[outside].tolist()), problems)
-        _check_references(bulk.ports, np.diff(bulk.ptr).tolist(), problems)
+    if not planned and not tried and _on_arrays(flat, model, elements, joined, problems):
         return
     sets = connection_sets(joined)
     flow_sums: list = []
@@ -2313,6 +2307,32 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
                  planned, folded)
     _check_references([m.port for members in nodes for m in members],
                       list(map(len, nodes)), problems)
+
+
+def _on_arrays(flat: FlatModel, model, elements, joined: list, problems) -> bool:
+    """The connections of ``joined`` with the physical sets formed on arrays
+    (:mod:`mechatron.compiler.nodes`), the signal sets set by set among them: the same
+    records as set by set in `_connections`. False, having changed nothing, when the
+    physical sets cannot be read so."""
+    signal = [isinstance(ports[0], SignalRef) for _, ports in joined]
+    signal_sets = connection_sets([j for j, s in zip(joined, signal) if s]) \
+        if any(signal) else []
+
+    def signal_set(cset) -> None:
+        flat.connection_sets.append([_set_member(m) for m in cset.members])
+        _signal_set(flat, cset, problems, model)
+
+    bulk = physical_nodes(flat, [j for j, s in zip(joined, signal) if not s],
+                          signal_sets, signal_set)
+    if bulk is None:
+        return False
+    ids, outside = bulk.port_ids, bulk.outside
+    connected = {port_key(m.port) for cset in signal_sets for m in cset.members
+                 if not m.outside}
+    _unconnected(flat, model, elements, set(ids[~outside].tolist()), connected,
+                 set(ids[outside].tolist()), problems)
+    _check_references(bulk.ports, np.diff(bulk.ptr).tolist(), problems)
+    return True
 
 
 def _unconnected(flat: FlatModel, model, elements, connected_ports: set[int],

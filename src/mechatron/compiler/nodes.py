@@ -1,14 +1,15 @@
 """The physical connection sets of a model formed on arrays (part of pass 2, connections).
 
-When every connect of a model joins ports (no signals), every port is bound in bulk and no
-subsystem is wired by its class's plan (:mod:`mechatron.compiler.folding`), the sets are
-the connected components of the graph of the connects' elements (a port with its side,
+When every physical port is bound in bulk and no subsystem is wired by its class's plan
+(:mod:`mechatron.compiler.folding`), the physical sets are the connected components of
+the graph of the connects' elements (a port with its side,
 :mod:`mechatron.core.connections`), ordered as `connection_sets` orders them: members by
-path, the inside element first, sets by their first member (`physical_nodes`). Their
-records, aliases and flow sums are then read off arrays of the members' rows, for these
-sets as for the nodes joined across folded ports (`joined_nodes`), and the flat model is
-the same as set by set (`flatten._physical_set`): Python runs per member only to read
-each port's attributes, once, and per set only to write its origin.
+path, the inside element first, sets by their first member (`physical_nodes`); the
+signal sets, formed set by set, take their places among them. The physical sets'
+records, aliases and flow sums are read off arrays of the members' rows, for these sets
+as for the nodes joined across folded ports (`joined_nodes`), and the flat model is the
+same as set by set (`flatten._physical_set`): Python runs per member only to read each
+port's attributes, once, and per set only to write its origin.
 """
 
 from __future__ import annotations
@@ -46,12 +47,14 @@ class Nodes:
         self.port_ids, self.ptr = port_ids, ptr
 
 
-def physical_nodes(flat, joined: list) -> Nodes | None:
+def physical_nodes(flat, joined: list, signals: list = (), signal_set=None) -> Nodes | None:
     """Record the connection sets of ``joined`` (``(writer, ports)`` of each connect) in
     ``flat`` as `flatten._connections` does set by set: the sets, and the aliases and
-    flow sums of each; return them. None, having changed nothing, when the model is not
-    one this path reads (a signal, a port without rows, a member of a class without the
-    first member's variables): the caller then goes set by set."""
+    flow sums of each; return them. The model's signal sets ``signals`` (`ConnectionSet`
+    each) take their places among them, each recorded by ``signal_set(cset)``. None,
+    having changed nothing, when the model is not one this path reads (a connect of
+    signals in ``joined``, a port without rows, a member of a class without the first
+    member's variables): the caller then goes set by set."""
     from mechatron.compiler.flatten import _ColumnSyms
 
     writers = list(map(itemgetter(0), joined))
@@ -104,10 +107,7 @@ def physical_nodes(flat, joined: list) -> Nodes | None:
     in_order = mem.tolist()
     nodes = Nodes(list(map(ports.__getitem__, in_order)), side[mem],
                   list(map(paths.__getitem__, in_order)), ids[first][mem], ptr)
-    if not _record(flat, nodes, rows[mem]):
-        return None
-    flat.connection_sets += _set_records(nodes)
-    return nodes
+    return nodes if _record(flat, nodes, rows[mem], signals, signal_set) else None
 
 
 def joined_nodes(flat, groups: list[list]) -> bool:
@@ -133,7 +133,7 @@ def joined_nodes(flat, groups: list[list]) -> bool:
                   np.fromiter(map(id, ports), dtype=np.int64, count=n),
                   _starts(np.fromiter(map(len, groups), dtype=np.intp, count=len(groups)),
                           total=True))
-    return _record(flat, nodes, rows)
+    return _record(flat, nodes, rows, records=False)
 
 
 def _starts(counts: np.ndarray, total: bool = False) -> np.ndarray:
@@ -144,10 +144,11 @@ def _starts(counts: np.ndarray, total: bool = False) -> np.ndarray:
     return np.append(starts, ends[-1] if len(ends) else 0) if total else starts
 
 
-def _record(flat, nodes: Nodes, rows: np.ndarray) -> bool:
-    """The sets' records, aliases and flow sums (see `physical_nodes`) from the members'
-    rows; False, having changed nothing, if a member's class lacks a variable of its
-    set's first member's class."""
+def _record(flat, nodes: Nodes, rows: np.ndarray, signals: list = (), signal_set=None,
+            records: bool = True) -> bool:
+    """The sets' records (with ``records``), aliases and flow sums (see `physical_nodes`)
+    from the members' rows, the ``signals`` in their places; False, having changed
+    nothing, if a member's class lacks a variable of its set's first member's class."""
     from mechatron.compiler.flatten import _binding_plan, _port_variables
 
     ports, ptr = nodes.ports, nodes.ptr
@@ -202,15 +203,41 @@ def _record(flat, nodes: Nodes, rows: np.ndarray) -> bool:
                           head_var[pick], -sign[heads][set_of[pick]] * sign[pick]))
             pick = np.flatnonzero(in_class & ~pair[set_of])
             sums.append((set_of[pick], np.full(len(pick), q), pick, var[pick], key))
+    aliases, alias_set = [], np.zeros(0, dtype=np.intp)
     if found:
         s, q, at, a, b, scale = (np.concatenate(x) for x in zip(*found))
         order = np.lexsort((at, q, s))
-        flat.aliases += list(zip(a[order].tolist(), b[order].tolist(),
-                                 scale[order].tolist(),
-                                 map(origins.__getitem__, s[order].tolist())))
+        alias_set = s[order]
+        aliases = list(zip(a[order].tolist(), b[order].tolist(), scale[order].tolist(),
+                           map(origins.__getitem__, alias_set.tolist())))
+    sets = _set_records(nodes) if records else None
+    if signals:
+        _in_order(flat, nodes, sets, aliases, alias_set, signals, signal_set)
+    else:
+        if records:
+            flat.connection_sets += sets
+        flat.aliases += aliases
     if sums:
         _sums(flat, sums, sign, origins, uniform)
     return True
+
+
+def _in_order(flat, nodes: Nodes, sets: list, aliases: list, alias_set: np.ndarray,
+              signals: list, signal_set) -> None:
+    """The physical sets' records and aliases (``aliases[k]`` of set ``alias_set[k]``)
+    and the signal sets (each recorded by ``signal_set``) in the order of their first
+    members, as set by set."""
+    ptr = nodes.ptr.tolist()
+    first = [(nodes.paths[a], bool(nodes.outside[a])) for a in ptr[:-1]]
+    first += [(cset.members[0].path, cset.members[0].outside) for cset in signals]
+    n = len(sets)
+    at = np.searchsorted(alias_set, np.arange(n + 1)).tolist()
+    for k in sorted(range(len(first)), key=first.__getitem__):
+        if k < n:
+            flat.connection_sets.append(sets[k])
+            flat.aliases += aliases[at[k]:at[k + 1]]
+        else:
+            signal_set(signals[k - n])
 
 
 def _sums(flat, parts: list, sign: np.ndarray, origins: list, uniform: np.ndarray) -> None:
