@@ -55,6 +55,16 @@ def physical_nodes(flat, joined: list, signals: list = (), signal_set=None) -> N
     having changed nothing, when the model is not one this path reads (a connect of
     signals in ``joined``, a port without rows, a member of a class without the first
     member's variables): the caller then goes set by set."""
+    formed = _formed(joined)
+    if formed is None:
+        return None
+    nodes, rows = formed       # (what forming them held is freed by now)
+    return nodes if _record(flat, nodes, rows, signals, signal_set) else None
+
+
+def _formed(joined: list) -> tuple[Nodes, np.ndarray] | None:
+    """The physical sets of ``joined`` and their members' rows (see `physical_nodes`);
+    None if a connect joins signals or a port was not bound in bulk."""
     from mechatron.compiler.flatten import _ColumnSyms
 
     writers = list(map(itemgetter(0), joined))
@@ -72,8 +82,7 @@ def physical_nodes(flat, joined: list, signals: list = (), signal_set=None) -> N
     _, first, inverse = np.unique(ids * 2 + outside, return_index=True,
                                   return_inverse=True)
     m = len(first)
-    first_list = first.tolist()
-    ports = list(map(refs.__getitem__, first_list))
+    ports = _objects(refs)[first].tolist()     # (no integer object per element)
     syms = list(map(_SYMS, ports))
     if any(type(s) is not _ColumnSyms for s in syms):
         return None                     # a port bound one by one: rows by name
@@ -104,10 +113,8 @@ def physical_nodes(flat, joined: list, signals: list = (), signal_set=None) -> N
     of_member = set_rank[label]
     mem = np.lexsort((rank, of_member))
     ptr = _starts(np.bincount(of_member, minlength=len(seen)), total=True)
-    in_order = mem.tolist()
-    nodes = Nodes(list(map(ports.__getitem__, in_order)), side[mem],
-                  list(map(paths.__getitem__, in_order)), ids[first][mem], ptr)
-    return nodes if _record(flat, nodes, rows[mem], signals, signal_set) else None
+    return Nodes(_objects(ports)[mem].tolist(), side[mem], _objects(paths)[mem].tolist(),
+                 ids[first][mem], ptr), rows[mem]
 
 
 def joined_nodes(flat, groups: list[list]) -> bool:
@@ -134,6 +141,11 @@ def joined_nodes(flat, groups: list[list]) -> bool:
                   _starts(np.fromiter(map(len, groups), dtype=np.intp, count=len(groups)),
                           total=True))
     return _record(flat, nodes, rows, records=False)
+
+
+def _objects(items: list) -> np.ndarray:
+    """``items`` as an array of objects (whatever they are: no sequence is unpacked)."""
+    return np.fromiter(items, dtype=object, count=len(items))
 
 
 def _starts(counts: np.ndarray, total: bool = False) -> np.ndarray:
