@@ -21,7 +21,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
-from mechatron.compiler.nodes import joined_nodes, physical_nodes
+from mechatron.compiler.nodes import _PARENT, joined_nodes, physical_nodes
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
 from mechatron.core.connections import connection_sets, is_driver, port_key
 from mechatron.core.context import BuildContext
@@ -2315,6 +2315,8 @@ def _on_arrays(flat: FlatModel, model, elements, joined: list, problems) -> bool
     records as set by set in `_connections`. False, having changed nothing, when the
     physical sets cannot be read so."""
     signal = [isinstance(ports[0], SignalRef) for _, ports in joined]
+    if all(signal):
+        return False            # no physical set (the sets are formed once, set by set)
     signal_sets = connection_sets([j for j, s in zip(joined, signal) if s]) \
         if any(signal) else []
 
@@ -2743,7 +2745,7 @@ def _check_references(ports: list, sizes: list[int], problems) -> None:
     reference component; the others are reported in the order of their first node."""
     if not ports:
         return
-    owners = list(map(_PARENT_OF, ports))
+    owners = list(map(_PARENT, ports))
     types = list(map(type, ports))
     is_part = np.fromiter(map(isinstance, owners, repeat(Component)), dtype=bool,
                           count=len(owners))
@@ -2786,9 +2788,6 @@ def _check_references(ports: list, sizes: list[int], problems) -> None:
         owners = sorted({p._parent.path for p in plist if p._parent is not None})
         problems.append(f"{domain.name} network of {', '.join(owners)} has no reference. "
                         f"{domain.hint or 'Add a reference component to it.'}")
-
-
-_PARENT_OF = attrgetter("_parent")
 
 
 # -- hybrid declarations (mt.Discrete, initial_equations); kept apart from the passes above

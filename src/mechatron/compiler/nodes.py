@@ -25,7 +25,7 @@ from mechatron.core.component import Connector
 
 __all__ = ["physical_nodes", "joined_nodes"]
 
-_PARENT = attrgetter("_parent")
+_PARENT = attrgetter("_parent")        # (flatten's reference check reads it too)
 _PATH = attrgetter("_path_cache")       # set by flatten's walk
 _SYMS = attrgetter("_syms")
 _ROW = attrgetter("row")
@@ -65,8 +65,6 @@ def physical_nodes(flat, joined: list, signals: list = (), signal_set=None) -> N
 def _formed(joined: list) -> tuple[Nodes, np.ndarray] | None:
     """The physical sets of ``joined`` and their members' rows (see `physical_nodes`);
     None if a connect joins signals or a port was not bound in bulk."""
-    from mechatron.compiler.flatten import _ColumnSyms
-
     writers = list(map(itemgetter(0), joined))
     lists = list(map(itemgetter(1), joined))
     refs = list(chain.from_iterable(lists))
@@ -83,12 +81,9 @@ def _formed(joined: list) -> tuple[Nodes, np.ndarray] | None:
                                   return_inverse=True)
     m = len(first)
     ports = _objects(refs)[first].tolist()     # (no integer object per element)
-    syms = list(map(_SYMS, ports))
-    if any(type(s) is not _ColumnSyms for s in syms):
+    rows = _bulk_rows(ports)
+    if rows is None:
         return None                     # a port bound one by one: rows by name
-    rows = np.fromiter(map(_ROW, syms), dtype=np.int64, count=m)
-    if rows.min() < 0:
-        return None
     try:
         paths = list(map(_PATH, ports))
     except AttributeError:              # a port outside the walked tree
@@ -122,17 +117,12 @@ def joined_nodes(flat, groups: list[list]) -> bool:
     `folding.join_planned` forms them) recorded in ``flat`` as set by set; False, having
     changed nothing, when a member's port was not bound in bulk or lacks a variable of
     its node's first member's class."""
-    from mechatron.compiler.flatten import _ColumnSyms
-
     members = list(chain.from_iterable(groups))
     if not members:
         return True
     ports = list(map(_PORT, members))
-    syms = list(map(_SYMS, ports))
-    if any(type(s) is not _ColumnSyms for s in syms):
-        return False
-    rows = np.fromiter(map(_ROW, syms), dtype=np.int64, count=len(syms))
-    if rows.min() < 0:
+    rows = _bulk_rows(ports)
+    if rows is None:
         return False
     n = len(members)
     nodes = Nodes(ports, np.fromiter(map(_OUTSIDE, members), dtype=bool, count=n),
@@ -141,6 +131,18 @@ def joined_nodes(flat, groups: list[list]) -> bool:
                   _starts(np.fromiter(map(len, groups), dtype=np.intp, count=len(groups)),
                           total=True))
     return _record(flat, nodes, rows, records=False)
+
+
+def _bulk_rows(ports: list) -> np.ndarray | None:
+    """The row of each port's first variable among the model's variables
+    (`flatten._first_row`), or None unless every port was bound in bulk with rows."""
+    from mechatron.compiler.flatten import _ColumnSyms
+
+    syms = list(map(_SYMS, ports))
+    if any(type(s) is not _ColumnSyms for s in syms):
+        return None
+    rows = np.fromiter(map(_ROW, syms), dtype=np.int64, count=len(syms))
+    return rows if rows.min() >= 0 else None
 
 
 def _objects(items: list) -> np.ndarray:
@@ -180,13 +182,14 @@ def _record(flat, nodes: Nodes, rows: np.ndarray, signals: list = (), signal_set
         offsets = _binding_plan(cls)[4]
         for key, j in key_no.items():
             place[k, j] = offsets.get(key, -1)
-    set_of = np.repeat(np.arange(n_set), np.diff(ptr))
     size = np.diff(ptr)
+    set_of = np.repeat(np.arange(n_set), size)
     sign = np.where(nodes.outside, -1.0, 1.0)
     # a member other than the first's port (a port met on both sides is one node)
     port_ids = nodes.port_ids
     other = port_ids != port_ids[heads][set_of]
-    n_other = np.bincount(set_of, weights=other, minlength=n_set).astype(np.intp)
+    # a set of two elements of two ports: its through variables an alias, not a sum
+    pair = ((size == 2) & (np.bincount(set_of, weights=other, minlength=n_set) > 0))[set_of]
     uniform = np.minimum.reduceat(kind, heads) == np.maximum.reduceat(kind, heads) \
         if n_set else np.zeros(0, dtype=bool)
     paths = nodes.paths
@@ -209,11 +212,10 @@ def _record(flat, nodes: Nodes, rows: np.ndarray, signals: list = (), signal_set
                 found.append((set_of[pick], np.full(len(pick), q), pick, var[pick],
                               head_var[pick], np.ones(len(pick))))
                 continue
-            pair = (size == 2) & (n_other > 0)
-            pick = np.flatnonzero(in_class & other & pair[set_of])
+            pick = np.flatnonzero(in_class & other & pair)
             found.append((set_of[pick], np.full(len(pick), q), pick, var[pick],
                           head_var[pick], -sign[heads][set_of[pick]] * sign[pick]))
-            pick = np.flatnonzero(in_class & ~pair[set_of])
+            pick = np.flatnonzero(in_class & ~pair)
             sums.append((set_of[pick], np.full(len(pick), q), pick, var[pick], key))
     aliases, alias_set = [], np.zeros(0, dtype=np.intp)
     if found:
