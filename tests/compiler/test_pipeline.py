@@ -112,3 +112,35 @@ def test_variables_read_through_alias_elimination_take_their_factor_or_constant(
     got = np.array(ca.Function("f", [x], [column])(point)).ravel()
     want = np.where(kept, scale * point[np.maximum(rep, 0)], scale)
     assert np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(20), "bridge", "two_drives"])
+def test_each_solved_unknown_is_noted_with_its_variable(build, monkeypatch):
+    """The lowering notes which variable each explicitly solved symbol is
+    (`Lowered.assigned_rows`: the one-equation blocks solved in bulk, the scalars, the
+    torn loops' sequences and their tearing variables), and the logged column reads a
+    solved unknown's expression from there instead of substituting it: each noted row
+    names the variable of the symbol beside it (the unknowns as given, then the
+    derivatives)."""
+    import mechatron.compiler.pipeline as pl
+    from tests.compiler.test_algebraic_loops import bridge
+
+    lowered, unknowns = [], []
+
+    def lower_watched(name, residuals, origins, names, *args, **kwargs):
+        unknowns.append(list(names))
+        lowered.append(lower(name, residuals, origins, names, *args, **kwargs))
+        return lowered[-1]
+
+    lower = pl.lower
+    monkeypatch.setattr(pl, "lower", lower_watched)
+    model = {"bridge": bridge, "two_drives": two_drives}.get(build, build)()
+    mt.compile_model(model)
+    low, names = lowered[0], unknowns[0]
+    rows = low.assigned_rows
+    assert len(rows) == low.assigned.numel() > 0
+    assert len(set(rows.tolist())) == len(rows)        # each variable solved once
+    for k, row in enumerate(rows.tolist()):
+        symbol = low.assigned[k].name()
+        assert symbol == (names[row] if row < len(names) else symbol)
+        assert row < len(names) or symbol.startswith("der(")

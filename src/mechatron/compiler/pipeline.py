@@ -94,7 +94,7 @@ def _read_through(column: ca.SX, rep: np.ndarray, scale: np.ndarray,
     return out
 
 
-def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
+def _logged(flat, alias, values: ca.SX | None = None) -> tuple[list, list, list, ca.SX]:
     """Every logged variable: names, units, docs, and the column of their expressions in
     the unknowns, formed in bulk (no CasADi call per variable): the model's variables by
     `_read_through`, the variables of folded ports put in place between them: those of
@@ -107,7 +107,12 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
 
     The rows of the model's variables come from alias elimination's arrays for all of
     them at once (`AliasResult.representative`, `AliasResult.scale`); only the folded
-    variables, placed between them, are read term by term."""
+    variables, placed between them, are read term by term.
+
+    ``values``: what each unknown (`AliasResult.unknowns`, in order) stands for, its
+    symbol or the expression the lowering solved it by; the representatives are read
+    from it, so that the column needs no substitution of the solved unknowns (a walk
+    over every logged variable). Without it, they are read as the model's symbols."""
     variables = flat.variables
     n = len(variables)
     names = list(variables)
@@ -124,8 +129,15 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
     # row of each model variable: after the folded variables placed before it
     var_row = np.arange(n) + np.searchsorted(position, np.arange(n), side="right")
     kept = rep >= 0
+    if values is not None and alias.unknown_index is not None:
+        # each representative read by its place among the unknowns
+        place = np.full(n, -1, dtype=np.intp)
+        place[alias.unknown_index] = np.arange(len(alias.unknown_index))
+        rep, x, n_x = np.where(kept, place[rep], -1), values, values.numel()
+    else:
+        x, n_x = flat.stack_variables(), n
     if not n_f:
-        return names, units, docs, _read_through(flat.stack_variables(), rep, scale, kept)
+        return names, units, docs, _read_through(x, rep, scale, kept)
     # the folded variables' rows among the model's, the model's variables put in place
     # around them, then the folded ones' terms in bulk
     at = np.minimum(position, n) + np.arange(n_f)
@@ -138,7 +150,6 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         out[~is_folded] = mine
         merged.append(out.tolist())
     column = ca.SX.zeros(n + n_f)
-    x = flat.stack_variables()
     _read_through(x, rep, scale, kept, column, var_row)
     t_ptr, t_var = f_terms
     count = np.diff(t_ptr)
@@ -159,11 +170,11 @@ def _logged(flat, alias) -> tuple[list, list, list, ca.SX]:
         constant = np.zeros(many.size)
         np.add.at(constant, t_row[gone], t_coef[gone])
         # the terms of one representative add up (a triplet keeps one entry per place)
-        key = t_row[~gone].astype(np.int64) * max(n, 1) + t_rep[~gone]
+        key = t_row[~gone].astype(np.int64) * max(n_x, 1) + t_rep[~gone]
         uniq, inverse = np.unique(key, return_inverse=True)
         sums = np.bincount(inverse, weights=t_coef[~gone], minlength=uniq.size)
-        M = ca.DM.triplet((uniq // max(n, 1)).tolist(), (uniq % max(n, 1)).tolist(),
-                          ca.DM(sums.tolist()), many.size, n)
+        M = ca.DM.triplet((uniq // max(n_x, 1)).tolist(), (uniq % max(n_x, 1)).tolist(),
+                          ca.DM(sums.tolist()), many.size, n_x)
         terms = ca.mtimes(M, x)
         nonzero = np.flatnonzero(constant)
         if len(nonzero):         # the constants where there are any (a sparse column)
@@ -283,8 +294,6 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
                 others=stack_columns(p, ctx.time))
     lap("structure")
 
-    # every logged variable as an expression of the unknowns
-    names, units, docs, out_col = _logged(flat, alias)
     dists = [r.d for r in relations]
     n_ode, n_res = len(low.ode), len(low.residuals)
     shadow = ca.SX.sym("pre_x", len(low.states))
@@ -296,9 +305,21 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
     ode_col = low.ode_col if n_ode else ca.SX(0, 1)
     res_col = ca.vertcat(*low.residuals) if n_res else ca.SX(0, 1)
     n_dist = 2
-    pile = [ode_col, res_col] + dists + ini + plan.exprs + [out_col]
+    pile = [ode_col, res_col] + dists + ini + plan.exprs
+    # what each unknown stands for: its symbol, or the expression of the states,
+    # algebraic unknowns, parameters and time that it was solved by
+    values = unknown_col
     if low.assigned.numel():
-        _, pile = ca.substitute_inplace([low.assigned], [low.assigned_expr], pile, False)
+        solved, pile = ca.substitute_inplace([low.assigned], [low.assigned_expr], pile,
+                                             False)
+        rows = low.assigned_rows
+        mine = np.flatnonzero(rows < unknown_col.numel())   # not a derivative's
+        if mine.size:
+            values = ca.SX(unknown_col)
+            values.nz[rows[mine].tolist()] = solved[0][mine.tolist()]
+    # every logged variable as an expression of those: gathered, not substituted
+    names, units, docs, out_col = _logged(flat, alias, values)
+    pile.append(out_col)
     if plan:   # action right-hand sides: relations read directly, not through modes
         n_act = len(plan.exprs)
         plan.exprs = direct_relations(pile[len(pile) - 1 - n_act:-1], relations,

@@ -40,6 +40,9 @@ class Lowered:
     residuals: list[ca.SX]
     assigned: ca.SX                  # symbols of explicitly solved unknowns, in order
     assigned_expr: ca.SX             # their expressions (earlier ones may appear)
+    #: the number of each of ``assigned`` among the variables of the structural problem
+    #: (the unknowns as given, then the derivatives)
+    assigned_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
     differentiated: list[str] = field(default_factory=list)
     n_blocks: int = 0
     largest_block: int = 0
@@ -387,10 +390,10 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     # the given equations and their Jacobian (from `reveal`) serve the one-equation
     # blocks, unless index reduction replaced or added equations among them
     singles = [(b.equations[0], b.variables[0]) for b in blocks if len(b.equations) == 1]
-    es, vs = (list(a) for a in zip(*singles)) if singles else ([], [])
+    es, single_vs = (list(a) for a in zip(*singles)) if singles else ([], [])
     given = None
     if res and reduction.jacobian is not None and (not singles or (
-            max(es) < n_orig and max(vs) < var_vec.numel()
+            max(es) < n_orig and max(single_vs) < var_vec.numel()
             and not (reduced and any(e in reduced for e in es)))):
         given = (res_vec, var_vec, reduction.jacobian, pattern, reduction.entries)
     bulk_x, bulk_solved, bulk_sols, bulk_at = _solve_singles(res, var_syms, singles, given)
@@ -400,10 +403,12 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     order: list[int] = []
     syms: list[ca.SX] = []
     exprs: list[ca.SX] = []
+    solved_vars: list[int] = []     # the variable of each of syms
 
-    def assign(sym: ca.SX, expr: ca.SX) -> None:
+    def assign(v: int, expr: ca.SX) -> None:
         order.append(-1 - len(syms))
-        syms.append(sym)
+        syms.append(var_syms[v])
+        solved_vars.append(v)
         exprs.append(expr)
 
     for block in blocks:
@@ -416,11 +421,11 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
                 continue
             quick = _explicit(res[e], var_syms[v])
             if quick is not None:
-                assign(var_syms[v], quick)
+                assign(v, quick)
                 continue
             coef = coefficient(e, v)
             if coef is not None:
-                assign(var_syms[v], _solve_linear(res[e], var_syms[v], coef))
+                assign(v, _solve_linear(res[e], var_syms[v], coef))
             else:
                 out.alg.append(var_names[v])
                 out.alg_syms.append(var_syms[v])
@@ -437,6 +442,13 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         out.assigned_expr = stack_columns(*bulk_sols, *([ca.vertcat(*exprs)] if exprs
                                                          else []))[
             [k if k >= 0 else n_bulk - 1 - k for k in order]]
+        # and the variable of each, by the same order
+        where = np.asarray(order, dtype=np.intp)
+        bulk = where >= 0
+        out.assigned_rows = np.empty(len(order), dtype=np.intp)
+        out.assigned_rows[bulk] = np.asarray(single_vs, dtype=np.intp)[
+            np.asarray(bulk_solved, dtype=np.intp)][where[bulk]]
+        out.assigned_rows[~bulk] = np.asarray(solved_vars, dtype=np.intp)[-1 - where[~bulk]]
     ders = [var_to_diff[v] for v in states]
     out.state_col, out.ode_col = (
         var_vec[rows] if res and (not rows or max(rows) < var_vec.numel())
@@ -793,15 +805,15 @@ def _solve_block(out: Lowered, assign, eqs, vs, adj, res, var_syms, var_names,
         a = ca.jacobian(rvec, zvec)
         b = ca.substitute(rvec, zvec, ca.DM.zeros(zvec.shape))
         sol = -ca.solve(a, b) if len(tv) > 1 else -b / a
-        for i, z in enumerate(tv):
-            assign(z, sol[i])
+        for i, v in enumerate(t.tearing_vars):
+            assign(v, sol[i])
     else:
         for v in t.tearing_vars:
             out.alg.append(var_names[v])
             out.alg_syms.append(var_syms[v])
         out.residuals.extend(resid)
-    for sym, expr in zip(seq_syms, seq_expr):
-        assign(sym, expr)
+    for (_, v), expr in zip(t.sequence, seq_expr):
+        assign(v, expr)
 
 
 def _time_derivative(r: ca.SX, var_syms, sym_index, var_to_diff, time) -> ca.SX:
