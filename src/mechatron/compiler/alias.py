@@ -333,11 +333,18 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     # _rank of every variable as sortable integers: its first three entries (priority
     # of a start value, differentiated, kind) packed in one; the declared attributes
     # take few distinct values, one code per combination
-    keys = [(v.start is not None, v.priority, v.kind) for v in flat.variables.values()]
-    table = dict.fromkeys(keys)
-    for c, key in enumerate(table):
-        table[key] = c
-    codes = np.array(list(map(table.__getitem__, keys)), dtype=np.intp)
+    table: dict = {}
+
+    def code(v) -> int:
+        key = (v.start is not None, v.priority, v.kind)
+        c = table.get(key)
+        if c is None:
+            c = table[key] = len(table)
+        return c
+
+    # (one key at a time, not a list of a tuple per variable: the tuples are freed as
+    # they are read)
+    codes = np.fromiter(map(code, flat.variables.values()), dtype=np.intp, count=n)
     has_start = np.array([key[0] for key in table], dtype=bool)[codes]
     rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
                      _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
