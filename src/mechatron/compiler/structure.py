@@ -403,12 +403,12 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
     order: list[int] = []
     syms: list[ca.SX] = []
     exprs: list[ca.SX] = []
-    solved_vars: list[int] = []     # the variable of each of syms
+    assigned_vars: list[int] = []   # the variable of each assignment, in block order
 
     def assign(v: int, expr: ca.SX) -> None:
         order.append(-1 - len(syms))
         syms.append(var_syms[v])
-        solved_vars.append(v)
+        assigned_vars.append(v)
         exprs.append(expr)
 
     for block in blocks:
@@ -418,6 +418,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
             k = bulk_at.get(e)
             if k is not None:
                 order.append(k)
+                assigned_vars.append(v)
                 continue
             quick = _explicit(res[e], var_syms[v])
             if quick is not None:
@@ -442,13 +443,7 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         out.assigned_expr = stack_columns(*bulk_sols, *([ca.vertcat(*exprs)] if exprs
                                                          else []))[
             [k if k >= 0 else n_bulk - 1 - k for k in order]]
-        # and the variable of each, by the same order
-        where = np.asarray(order, dtype=np.intp)
-        bulk = where >= 0
-        out.assigned_rows = np.empty(len(order), dtype=np.intp)
-        out.assigned_rows[bulk] = np.asarray(single_vs, dtype=np.intp)[
-            np.asarray(bulk_solved, dtype=np.intp)][where[bulk]]
-        out.assigned_rows[~bulk] = np.asarray(solved_vars, dtype=np.intp)[-1 - where[~bulk]]
+        out.assigned_rows = np.asarray(assigned_vars, dtype=np.intp)
     ders = [var_to_diff[v] for v in states]
     out.state_col, out.ode_col = (
         var_vec[rows] if res and (not rows or max(rows) < var_vec.numel())
