@@ -94,7 +94,7 @@ def _read_through(column: ca.SX, rep: np.ndarray, scale: np.ndarray,
     return out
 
 
-def _logged(flat, alias, values: ca.SX | None = None) -> tuple[list, list, list, ca.SX]:
+def _logged(flat, alias, values: ca.SX) -> tuple[list, list, list, ca.SX]:
     """Every logged variable: names, units, docs, and the column of their expressions in
     the unknowns, formed in bulk (no CasADi call per variable): the model's variables by
     `_read_through`, the variables of folded ports put in place between them: those of
@@ -112,7 +112,7 @@ def _logged(flat, alias, values: ca.SX | None = None) -> tuple[list, list, list,
     ``values``: what each unknown (`AliasResult.unknowns`, in order) stands for, its
     symbol or the expression the lowering solved it by; the representatives are read
     from it, so that the column needs no substitution of the solved unknowns (a walk
-    over every logged variable). Without it, they are read as the model's symbols."""
+    over every logged variable)."""
     variables = flat.variables
     n = len(variables)
     names = list(variables)
@@ -129,13 +129,12 @@ def _logged(flat, alias, values: ca.SX | None = None) -> tuple[list, list, list,
     # row of each model variable: after the folded variables placed before it
     var_row = np.arange(n) + np.searchsorted(position, np.arange(n), side="right")
     kept = rep >= 0
-    if values is not None and alias.unknown_index is not None:
-        # each representative read by its place among the unknowns
-        place = np.full(n, -1, dtype=np.intp)
-        place[alias.unknown_index] = np.arange(len(alias.unknown_index))
-        rep, x, n_x = np.where(kept, place[rep], -1), values, values.numel()
-    else:
-        x, n_x = flat.stack_variables(), n
+    # each representative read by its place among the unknowns
+    unknown = alias.unknown_index if alias.unknown_index is not None else \
+        np.zeros(0, dtype=np.intp)
+    place = np.full(n, -1, dtype=np.intp)
+    place[unknown] = np.arange(len(unknown))
+    rep, x, n_x = np.where(kept, place[rep], -1), values, values.numel()
     if not n_f:
         return names, units, docs, _read_through(x, rep, scale, kept)
     # the folded variables' rows among the model's, the model's variables put in place
