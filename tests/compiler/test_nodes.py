@@ -14,10 +14,11 @@ import mechatron as mt
 import mechatron.compiler.flatten as fl
 from mechatron.compiler.flatten import flatten
 from mechatron.errors import ModelError
+from mechatron.library import blocks
 from mechatron.library import electrical as el
 from mechatron.library import translational as tr
 from tests.compiler.test_flatten_connections import rc
-from tests.compiler.test_folding import Short, deep_ladder, two_drives
+from tests.compiler.test_folding import Short, deep_ladder, reading_model, two_drives
 from tests.compiler.test_hierarchy import Stage
 
 
@@ -201,32 +202,105 @@ def test_signal_sets_take_their_places_among_the_sets_on_arrays(name, variant,
     assert bulk == flattened(monkeypatch, model, bulk=False)[0]
 
 
-def flattened_planned(monkeypatch, build, *, bulk: bool) -> tuple[dict, bool]:
-    """(snapshot of ``build()`` flattened with its subsystems planned, whether the joined
-    nodes were read on arrays)."""
-    used = []
-    original = fl.joined_nodes
+def shuffled_stages(seed: int) -> mt.System:
+    """`stages` with its parts added and its connects written in a shuffled order, each
+    connect's ports reversed at random."""
+    rng = random.Random(seed)
+    m = mt.System("stages")
+    names = ["src", "gnd", *(f"s{k}" for k in range(5))]
+    rng.shuffle(names)
+    made = {"src": lambda: el.DCVoltageSource(V=1.0), "gnd": el.ElectricalReference}
+    got = {name: m.add(name, made.get(name, lambda: Stage(R=2.0, C=0.5))())
+           for name in names}
+    wires = [(got["src"].n, got["gnd"].port)]
+    node = got["src"].p
+    for k in range(5):
+        s = got[f"s{k}"]
+        wires += [(node, s.p), (s.gnd, got["gnd"].port)]
+        node = s.n
+    rng.shuffle(wires)
+    for a, b in wires:
+        m.connect(*((b, a) if rng.random() < 0.5 else (a, b)))
+    return m
 
-    def spy(flat, groups):
-        got = original(flat, groups) if bulk else False
-        used.append(got)
+
+def driven_drives() -> mt.System:
+    """`two_drives` fed by a controlled source that a step drives: signal sets among the
+    joined nodes."""
+    m = two_drives()
+    step = m.add("step", blocks.Step(t_step=0.1, final=2.0))
+    src = m.add("boost", el.ControlledVoltageSource())
+    r = m.add("r", el.Resistor(R=10.0))
+    m.connect(step.y, src.u)
+    m.connect(src.p, r.p)
+    m.connect(r.n, m.d1.p)
+    m.connect(src.n, m.g.port)
+    return m
+
+
+def floating_stages() -> mt.System:
+    """Stages without a reference."""
+    m = mt.System("floating")
+    a = m.add("a", Stage(R=1.0, C=1.0))
+    b = m.add("b", Stage(R=1.0, C=1.0))
+    m.connect(a.n, b.p)
+    m.connect(a.gnd, b.gnd, b.n)
+    return m
+
+
+def flattened_planned(monkeypatch, build, *, arrays: bool,
+                      joined: bool = True) -> tuple[dict | str, bool]:
+    """(snapshot of ``build()`` flattened with its subsystems planned, the folded ports'
+    columns with it, or the message it fails with; whether `planned_nodes` formed the
+    nodes). Without ``arrays`` the nodes are joined set by set (`folding.join_planned`),
+    read on arrays (`joined_nodes`) with ``joined``."""
+    used = []
+    original, original_joined = fl.planned_nodes, fl.joined_nodes
+
+    def spy(*args):
+        got = original(*args) if arrays else None
+        used.append(got is not None)
         return got
 
     with monkeypatch.context() as m:
-        m.setattr(fl, "joined_nodes", spy)
-        flat = flatten(build())
+        m.setattr(fl, "planned_nodes", spy)
+        m.setattr(fl, "joined_nodes", lambda flat, groups: joined and original_joined(
+            flat, groups))
+        try:
+            flat = flatten(build())
+        except ModelError as exc:
+            return str(exc), any(used)
     assert flat.folded, "no port was folded"
-    return snapshot(flat), any(used)
+    f = flat.folded
+    return {**snapshot(flat), "folded": (f.names, f.units, f.docs, f.position, f.order,
+                                         f.term_ptr.tolist(), f.term_rows.tolist())}, \
+        any(used)
 
 
-@pytest.mark.parametrize("build", [lambda: stages(5), deep_ladder, two_drives],
-                         ids=["stages", "deep", "two_drives"])
-def test_joined_nodes_on_arrays_give_the_flat_model_of_set_by_set(build, monkeypatch):
-    """Subsystems wired by their plan: the nodes joined across their folded ports."""
-    bulk, used = flattened_planned(monkeypatch, build, bulk=True)
-    plain, _ = flattened_planned(monkeypatch, build, bulk=False)
-    assert used
-    assert bulk == plain
+@pytest.mark.parametrize("build", [
+    lambda: stages(5), lambda: shuffled_stages(1), lambda: shuffled_stages(2), two_drives,
+    driven_drives, floating_stages],
+    ids=["stages", "stages_shuffled_1", "stages_shuffled_2", "two_drives", "with_signals",
+         "no_reference"])
+def test_nodes_joined_on_arrays_give_the_flat_model_of_set_by_set(build, monkeypatch):
+    """Subsystems wired by their plan: the nodes joined across their folded ports formed
+    on arrays, joined set by set and read on arrays, and all set by set."""
+    arrays, used = flattened_planned(monkeypatch, build, arrays=True)
+    joined, _ = flattened_planned(monkeypatch, build, arrays=False)
+    plain, _ = flattened_planned(monkeypatch, build, arrays=False, joined=False)
+    assert used, "the nodes were not formed on arrays"
+    assert arrays == joined == plain
+
+
+@pytest.mark.parametrize("build", [deep_ladder, reading_model],
+                         ids=["subsystem_in_subsystem", "port_read_by_an_equation"])
+def test_nodes_joined_set_by_set_where_arrays_do_not_reach(build, monkeypatch):
+    """A plan's set holding a folded port of a subsystem within, or a planned port read
+    by an equation (a member itself, bound late): joined set by set, read on arrays."""
+    arrays, used = flattened_planned(monkeypatch, build, arrays=True)
+    plain, _ = flattened_planned(monkeypatch, build, arrays=False, joined=False)
+    assert not used
+    assert arrays == plain
 
 
 def test_a_model_of_signals_alone_goes_set_by_set(monkeypatch):

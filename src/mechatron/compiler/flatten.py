@@ -21,7 +21,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
-from mechatron.compiler.nodes import _PARENT, joined_nodes, physical_nodes
+from mechatron.compiler.nodes import _PARENT, joined_nodes, physical_nodes, planned_nodes
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
 from mechatron.core.connections import connection_sets, is_driver, port_key
 from mechatron.core.context import BuildContext
@@ -2260,7 +2260,7 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
             ok.append(b)
         if len(ok) > 1:
             joined.append((writer, ok))
-    if not planned and not tried and _on_arrays(flat, model, elements, joined, problems):
+    if not tried and _on_arrays(flat, model, elements, joined, problems, planned, folded):
         return
     sets = connection_sets(joined)
     flow_sums: list = []
@@ -2279,7 +2279,8 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
         if not joined_nodes(flat, nodes):
             for members in nodes:
                 _physical_set(flat, _Joined(members), flow_sums)
-        _folded_variables(flat, folded, joining)
+        _folded_variables(flat, folded, [joining.node[pid].port for pid in folded],
+                          [[m.port for m in joining.flow[pid]] for pid in folded])
     else:
         nodes = [cset.members for cset in sets if not cset.is_signal]
     _flow_sums(flat, flow_sums)
@@ -2309,11 +2310,13 @@ def _connections(flat: FlatModel, model, elements, connects, problems, planned=N
                       list(map(len, nodes)), problems)
 
 
-def _on_arrays(flat: FlatModel, model, elements, joined: list, problems) -> bool:
+def _on_arrays(flat: FlatModel, model, elements, joined: list, problems, planned=None,
+               folded=None) -> bool:
     """The connections of ``joined`` with the physical sets formed on arrays
-    (:mod:`mechatron.compiler.nodes`), the signal sets set by set among them: the same
-    records as set by set in `_connections`. False, having changed nothing, when the
-    physical sets cannot be read so."""
+    (:mod:`mechatron.compiler.nodes`), joined across the ports ``folded`` of the
+    subsystems ``planned``, the signal sets set by set among them: the same records as
+    set by set in `_connections`. False, having changed nothing, when the physical sets
+    cannot be read so."""
     signal = [isinstance(ports[0], SignalRef) for _, ports in joined]
     if all(signal):
         return False            # no physical set (the sets are formed once, set by set)
@@ -2324,16 +2327,23 @@ def _on_arrays(flat: FlatModel, model, elements, joined: list, problems) -> bool
         flat.connection_sets.append([_set_member(m) for m in cset.members])
         _signal_set(flat, cset, problems, model)
 
-    bulk = physical_nodes(flat, [j for j, s in zip(joined, signal) if not s],
-                          signal_sets, signal_set)
-    if bulk is None:
-        return False
-    ids, outside = bulk.port_ids, bulk.outside
+    physical = [j for j, s in zip(joined, signal) if not s]
+    if planned:
+        joining = planned_nodes(flat, physical, planned, folded, signal_sets, signal_set)
+        if joining is None:
+            return False
+        outer, nodes = joining.outer, joining.nodes
+        _folded_variables(flat, folded, joining.firsts, joining.insides)
+    else:
+        outer = nodes = physical_nodes(flat, physical, signal_sets, signal_set)
+        if nodes is None:
+            return False
+    ids, outside = outer.port_ids, outer.outside
     connected = {port_key(m.port) for cset in signal_sets for m in cset.members
                  if not m.outside}
     _unconnected(flat, model, elements, set(ids[~outside].tolist()), connected,
-                 set(ids[outside].tolist()), problems)
-    _check_references(bulk.ports, np.diff(bulk.ptr).tolist(), problems)
+                 set(ids[outside].tolist()), problems, planned, folded)
+    _check_references(nodes.ports, np.diff(nodes.ptr).tolist(), problems)
     return True
 
 
@@ -2387,17 +2397,15 @@ class _Joined:
         self.members = members
 
 
-def _folded_variables(flat: FlatModel, folded, folding) -> None:
+def _folded_variables(flat: FlatModel, folded, firsts: list, insides: list) -> None:
     """Record the variables of the folded ports, for logging them (`FlatModel.folded`, a
     `FoldedColumns`): each one's name, unit, doc and place, and the rows of the model
-    variables it sums (`_folded_terms`). Python runs per port only to gather each one's
-    node and members; the rest are maps over the ports and array operations."""
-    node, flow = folding.node, folding.flow
+    variables it sums (`_folded_terms`); ``firsts[i]`` is the first member of the node of
+    folded port ``i``, ``insides[i]`` the ports of its inside members. These are maps
+    over the ports and array operations."""
     ports = list(folded.values())
     types = list(map(type, ports))
     plans = {cls: _folded_plan(cls) for cls in dict.fromkeys(types)}
-    firsts = [node[pid].port for pid in folded]
-    insides = [[m.port for m in flow[pid]] for pid in folded]
     ptr, rows, var_count = _folded_terms(types, plans, firsts, insides,
                                          flat.__dict__.get("_rows", {}))
     suffixes = {cls: ["." + key for key in plan[0]] for cls, plan in plans.items()}

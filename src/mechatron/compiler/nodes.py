@@ -1,15 +1,18 @@
 """The physical connection sets of a model formed on arrays (part of pass 2, connections).
 
-When every physical port is bound in bulk and no subsystem is wired by its class's plan
-(:mod:`mechatron.compiler.folding`), the physical sets are the connected components of
-the graph of the connects' elements (a port with its side,
+When every physical port is bound in bulk, the physical sets are the connected components
+of the graph of the connects' elements (a port with its side,
 :mod:`mechatron.core.connections`), ordered as `connection_sets` orders them: members by
 path, the inside element first, sets by their first member (`physical_nodes`); the
-signal sets, formed set by set, take their places among them. The physical sets'
-records, aliases and flow sums are read off arrays of the members' rows, for these sets
-as for the nodes joined across folded ports (`joined_nodes`), and the flat model is the
-same as set by set (`flatten._physical_set`): Python runs per member only to read each
-port's attributes, once, and per set only to write its origin.
+signal sets, formed set by set, take their places among them. With subsystems wired by
+their class's plan (:mod:`mechatron.compiler.folding`), the nodes are the components of
+that graph with each plan's sets added instance by instance and each folded port's two
+elements joined, the folded ports themselves left out (`planned_nodes`), as
+`folding.join_planned` joins them set by set. The sets' records, aliases and flow sums
+are read off arrays of the members' rows, for these nodes as for those joined set by set
+(`joined_nodes`), and the flat model is the same as set by set
+(`flatten._physical_set`): Python runs per member only to read each port's attributes,
+once, and per set only to write its origin.
 """
 
 from __future__ import annotations
@@ -23,11 +26,12 @@ from scipy.sparse import csgraph
 
 from mechatron.core.component import Connector
 
-__all__ = ["physical_nodes", "joined_nodes"]
+__all__ = ["physical_nodes", "planned_nodes", "joined_nodes", "Joined"]
 
 _PARENT = attrgetter("_parent")        # (flatten's reference check reads it too)
 _PATH = attrgetter("_path_cache")       # set by flatten's walk
 _SYMS = attrgetter("_syms")
+_CHILDREN = attrgetter("_children")
 _ROW = attrgetter("row")
 _PORT = attrgetter("port")              # of a Member
 _OUTSIDE = attrgetter("outside")
@@ -65,6 +69,21 @@ def physical_nodes(flat, joined: list, signals: list = (), signal_set=None) -> N
 def _formed(joined: list) -> tuple[Nodes, np.ndarray] | None:
     """The physical sets of ``joined`` and their members' rows (see `physical_nodes`);
     None if a connect joins signals or a port was not bound in bulk."""
+    written = _elements(joined)
+    if written is None:
+        return None
+    got = _components(*written)
+    if got is None:
+        return None
+    nodes = got[0]
+    rows = _bulk_rows(nodes.ports)
+    return None if rows is None else (nodes, rows)
+
+
+def _elements(joined: list) -> tuple[list, np.ndarray, np.ndarray] | None:
+    """The elements of the connects ``joined`` (``(writer, ports)`` each): each port, its
+    side (outside when the connect's writer owns it) and the place of its connect's first
+    element, to which it is joined; None if a connect joins signals."""
     writers = list(map(itemgetter(0), joined))
     lists = list(map(itemgetter(1), joined))
     refs = list(chain.from_iterable(lists))
@@ -72,44 +91,55 @@ def _formed(joined: list) -> tuple[Nodes, np.ndarray] | None:
         return None
     counts = np.fromiter(map(len, lists), dtype=np.intp, count=len(lists))
     n_ref = len(refs)
-    ids = np.fromiter(map(id, refs), dtype=np.int64, count=n_ref)
-    # an element is a port with its side: outside when the connect's writer owns it
     outside = np.fromiter(map(id, map(_PARENT, refs)), dtype=np.int64, count=n_ref) == \
         np.repeat(np.fromiter(map(id, writers), dtype=np.int64, count=len(writers)),
                   counts)
-    _, first, inverse = np.unique(ids * 2 + outside, return_index=True,
-                                  return_inverse=True)
+    return refs, outside, np.repeat(_starts(counts), counts)
+
+
+def _components(refs: list, side: np.ndarray, head: np.ndarray,
+                drop: np.ndarray | None = None) -> tuple[Nodes, np.ndarray,
+                                                         np.ndarray] | None:
+    """The sets of the elements ``refs[k]`` (a port; its outside element with
+    ``side[k]``), each element joined to that of ``refs[head[k]]``: the connected
+    components, members ordered by path, the inside element of a port first, sets by
+    their first member. The elements of the ports whose ids are in ``drop`` join sets
+    but are no members. Returns the sets, each element's key (``2 id + side``, sorted)
+    and the set it is in (-1: a set of dropped elements alone); None if a port lies
+    outside the walked tree (it has no path)."""
+    n_ref = len(refs)
+    ids = np.fromiter(map(id, refs), dtype=np.int64, count=n_ref)
+    keys, first, inverse = np.unique(ids * 2 + side, return_index=True,
+                                     return_inverse=True)
     m = len(first)
     ports = _objects(refs)[first].tolist()     # (no integer object per element)
-    rows = _bulk_rows(ports)
-    if rows is None:
-        return None                     # a port bound one by one: rows by name
     try:
         paths = list(map(_PATH, ports))
     except AttributeError:              # a port outside the walked tree
         return None
     if None in paths:
         return None
-    side = outside[first]
-    # each element joined to the first of its connect: the sets are the components
-    start = np.repeat(_starts(counts), counts)
-    graph = sparse.coo_matrix((np.ones(n_ref, dtype=np.int8), (inverse, inverse[start])),
+    port_ids = ids[first]
+    graph = sparse.coo_matrix((np.ones(n_ref, dtype=np.int8), (inverse, inverse[head])),
                               shape=(m, m))
-    _, label = csgraph.connected_components(graph, directed=False)
+    n_label, label = csgraph.connected_components(graph, directed=False)
     # members by path, the inside element of a port first (the elements are numbered by
     # port, inside before outside, and the sort is stable); sets by their first member
-    order = sorted(range(m), key=paths.__getitem__)
+    kept = range(m) if drop is None else np.flatnonzero(~np.isin(port_ids, drop)).tolist()
+    order = np.array(sorted(kept, key=paths.__getitem__), dtype=np.intp)
+    kept = np.sort(order)
     rank = np.empty(m, dtype=np.int64)
-    rank[order] = np.arange(m)
+    rank[order] = np.arange(len(order))
     by_rank = label[order]
     _, seen = np.unique(by_rank, return_index=True)
-    set_rank = np.empty(len(seen), dtype=np.int64)
+    set_rank = np.full(n_label, -1, dtype=np.int64)
     set_rank[by_rank[np.sort(seen)]] = np.arange(len(seen))
-    of_member = set_rank[label]
-    mem = np.lexsort((rank, of_member))
+    of_member = set_rank[label[kept]]
+    mem = kept[np.lexsort((rank[kept], of_member))]
     ptr = _starts(np.bincount(of_member, minlength=len(seen)), total=True)
-    return Nodes(_objects(ports)[mem].tolist(), side[mem], _objects(paths)[mem].tolist(),
-                 ids[first][mem], ptr), rows[mem]
+    nodes = Nodes(_objects(ports)[mem].tolist(), side[first][mem],
+                  _objects(paths)[mem].tolist(), port_ids[mem], ptr)
+    return nodes, keys, set_rank[label]
 
 
 def joined_nodes(flat, groups: list[list]) -> bool:
@@ -131,6 +161,101 @@ def joined_nodes(flat, groups: list[list]) -> bool:
                   _starts(np.fromiter(map(len, groups), dtype=np.intp, count=len(groups)),
                           total=True))
     return _record(flat, nodes, rows, records=False)
+
+
+class Joined:
+    """The result of `planned_nodes`: the model's own connection sets (``outer``, its
+    subsystems' folded ports members of them), the nodes they join across those ports
+    (``nodes``), and for each folded port the first member of its node and the inside
+    members whose through variables sum to its own (``firsts`` and ``insides``, in the
+    order of the folded ports)."""
+
+    __slots__ = ("outer", "nodes", "firsts", "insides")
+
+    def __init__(self, outer: Nodes, nodes: Nodes, firsts: list, insides: list):
+        self.outer, self.nodes, self.firsts, self.insides = outer, nodes, firsts, insides
+
+
+def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list = (),
+                  signal_set=None) -> Joined | None:
+    """Record the connection sets of ``joined`` (the physical connects not wired by a
+    plan) and the nodes they form with the sets of the subsystems ``planned`` (see
+    `folding.plan_subsystems`), their ports ``folded``, in ``flat`` as `flatten` does set
+    by set (`folding.join_planned`, `joined_nodes`): the model's own sets and its signal
+    sets ``signals`` (each recorded by ``signal_set``) in their places, then the nodes'
+    aliases and flow sums; return them. The nodes are the connected components of the
+    model's elements, each plan's sets instance by instance (the ports of a class's
+    instances gathered name by name, not member by member) and each folded port's two
+    elements, its own left out. None, having changed nothing, when a port is read by an
+    equation, a plan's set holds a port folded itself (a subsystem within a subsystem),
+    or a member was not bound in bulk: the caller then goes set by set."""
+    if len(planned.where) != len(folded):
+        return None                     # a port read by an equation: a member itself
+    written = _elements(joined)
+    if written is None:
+        return None
+    outer_refs, outer_side, outer_head = written
+    refs, sides, heads = list(outer_refs), [outer_side], [outer_head]
+    flows: dict[int, tuple] = {}         # id(folded port) -> its inside members' ports
+
+    def add(col: list, outside: bool, at: int) -> None:
+        sides.append(np.full(len(col), outside))
+        heads.append(np.arange(at, at + len(col)))
+        refs.extend(col)
+
+    by_plan: dict = {}
+    for el, plan in planned.values():
+        by_plan.setdefault(id(plan), (plan, []))[1].append(el)
+    for plan, instances in by_plan.values():
+        children = list(map(_CHILDREN, instances))
+        for owner, names_list in plan.sets:
+            cols = [_ports_at(children, names) for names in names_list]
+            if any(map(folded.__contains__, map(id, chain.from_iterable(cols)))):
+                return None             # a subsystem's port within a subsystem's set
+            at = len(refs)
+            if owner is not None:
+                own = list(map(itemgetter(owner), children))
+                add(own, True, at)
+                flows.update(zip(map(id, own), zip(*cols)))
+            for col in cols:
+                add(col, False, at)
+    ports = list(folded.values())       # each one's two elements joined: one node
+    at = len(refs)
+    add(ports, False, at)
+    add(ports, True, at)
+    got = _components(refs, np.concatenate(sides), np.concatenate(heads),
+                      np.fromiter(folded, dtype=np.int64, count=len(folded)))
+    if got is None:
+        return None
+    nodes, keys, set_of = got
+    rows = _bulk_rows(nodes.ports)
+    if rows is None:
+        return None
+    links = _links(nodes, rows)
+    outer = _components(outer_refs, outer_side, outer_head)
+    if links is None or outer is None:
+        return None
+    outer = outer[0]
+    outside = np.fromiter(map(id, ports), dtype=np.int64, count=len(ports)) * 2 + 1
+    node_of = set_of[np.searchsorted(keys, outside)]
+    if node_of.size and node_of.min() < 0:
+        return None                     # (every node holds a port that is no plan's)
+    firsts = [nodes.ports[k] for k in nodes.ptr[node_of].tolist()]
+    insides = list(map(flows.__getitem__, folded))
+    _in_order(flat, outer, _set_records(outer), [], np.zeros(0, dtype=np.intp), signals,
+              signal_set)
+    flat.aliases += links[0]
+    _sums(flat, *links[2:])
+    return Joined(outer, nodes, firsts, insides)
+
+
+def _ports_at(children: list[dict], names: tuple) -> list:
+    """The port at ``names`` (``("r", "p")``) below each instance, whose children are
+    ``children``."""
+    items = children
+    for name in names[:-1]:
+        items = map(_CHILDREN, map(itemgetter(name), items))
+    return list(map(itemgetter(names[-1]), items))
 
 
 def _bulk_rows(ports: list) -> np.ndarray | None:
@@ -163,6 +288,26 @@ def _record(flat, nodes: Nodes, rows: np.ndarray, signals: list = (), signal_set
     """The sets' records (with ``records``), aliases and flow sums (see `physical_nodes`)
     from the members' rows, the ``signals`` in their places; False, having changed
     nothing, if a member's class lacks a variable of its set's first member's class."""
+    links = _links(nodes, rows)
+    if links is None:
+        return False
+    if records:
+        sets = _set_records(nodes)
+        if signals:
+            _in_order(flat, nodes, sets, links[0], links[1], signals, signal_set)
+        else:
+            flat.connection_sets += sets
+    if not (records and signals):
+        flat.aliases += links[0]
+    _sums(flat, *links[2:])
+    return True
+
+
+def _links(nodes: Nodes, rows: np.ndarray) -> tuple | None:
+    """The aliases of the sets ``nodes`` (``(variable, target, scale, origin)`` each, by
+    row, set after set) with the set of each, and their flow sums (what `_sums` takes),
+    read off the members' rows; None if a member's class lacks a variable of its set's
+    first member's class."""
     from mechatron.compiler.flatten import _binding_plan, _port_variables
 
     ports, ptr = nodes.ports, nodes.ptr
@@ -205,7 +350,7 @@ def _record(flat, nodes: Nodes, rows: np.ndarray, signals: list = (), signal_set
             j = key_no[key]
             var = rows + place[kind, j]
             if (place[kind[in_class], j] < 0).any():
-                return False            # a member without the variable: by path
+                return None             # a member without the variable: by path
             head_var = var[heads][set_of]
             if q < len(across):
                 pick = np.flatnonzero(in_class & other)
@@ -224,16 +369,7 @@ def _record(flat, nodes: Nodes, rows: np.ndarray, signals: list = (), signal_set
         alias_set = s[order]
         aliases = list(zip(a[order].tolist(), b[order].tolist(), scale[order].tolist(),
                            map(origins.__getitem__, alias_set.tolist())))
-    sets = _set_records(nodes) if records else None
-    if signals:
-        _in_order(flat, nodes, sets, aliases, alias_set, signals, signal_set)
-    else:
-        if records:
-            flat.connection_sets += sets
-        flat.aliases += aliases
-    if sums:
-        _sums(flat, sums, sign, origins, uniform)
-    return True
+    return aliases, alias_set, sums, sign, origins, uniform
 
 
 def _in_order(flat, nodes: Nodes, sets: list, aliases: list, alias_set: np.ndarray,
@@ -260,6 +396,9 @@ def _sums(flat, parts: list, sign: np.ndarray, origins: list, uniform: np.ndarra
     members and variables, and the key; one sum per set and key, ordered as set by set
     (`flatten._sum_equations`)."""
     from mechatron.compiler.flatten import _sum_equations
+
+    if not parts:
+        return
 
     s, q, at, var = (np.concatenate(x) for x in zip(*(p[:4] for p in parts)))
     part = np.repeat(np.arange(len(parts)), [len(p[0]) for p in parts])
