@@ -117,6 +117,42 @@ def test_database_subsystem_models_are_unchanged_by_folding(name, variant, monke
                 min(entry.experiment.t_stop, 0.05), solver=entry.experiment.solver)
 
 
+class TimedStage(Stage):
+    """A stage whose class writes equations (none beyond its parent's connects) and
+    declares a time scale: its time constant."""
+
+    def equations(self):
+        return []
+
+    def time_scales(self):
+        return [self.R * self.C]
+
+
+def timed_stages():
+    m = mt.System("timed")
+    src = m.add("src", el.DCVoltageSource(V=1.0))
+    g = m.add("g", el.ElectricalReference())
+    a = m.add("a", TimedStage(R=1.0, C=2.0))
+    b = m.add("b", TimedStage(R=3.0, C=0.5))
+    c = m.add("c", Stage(R=1.0, C=1.0))       # no time scale of its own
+    m.connect(src.p, a.p)
+    m.connect(a.n, b.p)
+    m.connect(b.n, c.p)
+    m.connect(src.n, g.port, a.gnd, b.gnd, c.gnd)
+    return m
+
+
+def test_a_planned_subsystem_keeps_the_time_scales_its_class_declares(monkeypatch):
+    """Each instance's time scales, read as when its ports are written out: variable-step
+    solvers keep their steps below half the smallest."""
+    assert {"a.p", "b.p", "c.p"} <= set(flatten(timed_stages()).folded.ports)
+    folded = mt.compile_model(timed_stages())
+    plain = unfolded(monkeypatch, timed_stages)
+    got = np.asarray(folded.f_scales(folded.p0)).ravel()
+    np.testing.assert_allclose(sorted(got), [1.5, 2.0], rtol=1e-15)
+    np.testing.assert_array_equal(got, np.asarray(plain.f_scales(plain.p0)).ravel())
+
+
 def test_port_flows_balance_across_the_folded_node():
     res = mt.simulate(two_drives(), 0.2, log="all", rtol=1e-10, atol=1e-12)
     # what flows into a drive's pin flows on through its resistor; at the shared shaft

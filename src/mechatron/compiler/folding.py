@@ -119,7 +119,7 @@ def _plan(el, keys: frozenset) -> ClassPlan | None:
     ``keys``: what the ``__dict__`` of an instance wired by it may hold. ``equations()``
     is called before symbols are bound: reading a variable or parameter raises, which
     marks the class as not qualifying."""
-    from mechatron.compiler.flatten import _as_equations, _own_methods
+    from mechatron.compiler.flatten import _as_equations, _has_time_scales, _own_methods
     children = el._children
     ports = [n for n, c in children.items() if isinstance(c, Connector)]
     parts = [c for c in children.values() if isinstance(c, Component)]
@@ -165,7 +165,9 @@ def _plan(el, keys: frozenset) -> ClassPlan | None:
                for c in part._children.values()):
             return None                 # a port left open inside: reported as before
     own = {name: own[name] for name in ports if name in own}   # declaration order
-    return ClassPlan(own, sets, has_equations, keys)
+    # its time scales are read per instance as when written out (by the class that
+    # writes equations), where the class has any
+    return ClassPlan(own, sets, has_equations and _has_time_scales(type(el)), keys)
 
 
 class Joining:
