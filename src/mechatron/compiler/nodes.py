@@ -98,48 +98,70 @@ def _elements(joined: list) -> tuple[list, np.ndarray, np.ndarray] | None:
 
 
 def _components(refs: list, side: np.ndarray, head: np.ndarray,
-                drop: np.ndarray | None = None) -> tuple[Nodes, np.ndarray,
-                                                         np.ndarray] | None:
+                drop: np.ndarray | None = None, outer: int = 0) -> tuple | None:
     """The sets of the elements ``refs[k]`` (a port; its outside element with
     ``side[k]``), each element joined to that of ``refs[head[k]]``: the connected
     components, members ordered by path, the inside element of a port first, sets by
     their first member. The elements of the ports whose ids are in ``drop`` join sets
-    but are no members. Returns the sets, each element's key (``2 id + side``, sorted)
-    and the set it is in (-1: a set of dropped elements alone); None if a port lies
-    outside the walked tree (it has no path)."""
+    but are no members. Returns the sets, each element's key (``2 id + side``, sorted),
+    the set it is in (-1: a set of dropped elements alone), and with ``outer`` the sets
+    the first ``outer`` refs form by themselves (no member dropped), else None; None if
+    a port lies outside the walked tree (it has no path)."""
     n_ref = len(refs)
     ids = np.fromiter(map(id, refs), dtype=np.int64, count=n_ref)
     keys, first, inverse = np.unique(ids * 2 + side, return_index=True,
                                      return_inverse=True)
     m = len(first)
-    ports = _objects(refs)[first].tolist()     # (no integer object per element)
+    ports = _objects(refs)[first]              # (no integer object per element)
     try:
-        paths = list(map(_PATH, ports))
+        paths = list(map(_PATH, ports.tolist()))
     except AttributeError:              # a port outside the walked tree
         return None
     if None in paths:
         return None
-    port_ids = ids[first]
-    graph = sparse.coo_matrix((np.ones(n_ref, dtype=np.int8), (inverse, inverse[head])),
-                              shape=(m, m))
-    n_label, label = csgraph.connected_components(graph, directed=False)
-    # members by path, the inside element of a port first (the elements are numbered by
-    # port, inside before outside, and the sort is stable); sets by their first member
-    kept = range(m) if drop is None else np.flatnonzero(~np.isin(port_ids, drop)).tolist()
-    order = np.array(sorted(kept, key=paths.__getitem__), dtype=np.intp)
-    kept = np.sort(order)
-    rank = np.empty(m, dtype=np.int64)
-    rank[order] = np.arange(len(order))
-    by_rank = label[order]
+    # the elements by path, the inside element of a port first (they are numbered by
+    # port, inside before outside, and the sort is stable)
+    by_path = np.array(sorted(range(m), key=paths.__getitem__), dtype=np.intp)
+    items = (ports, side[first], _objects(paths), ids[first])
+
+    def labels(k: int) -> tuple[int, np.ndarray]:   # the components of the first k refs
+        graph = sparse.coo_matrix((np.ones(k, dtype=np.int8),
+                                   (inverse[:k], inverse[head[:k]])), shape=(m, m))
+        return csgraph.connected_components(graph, directed=False)
+
+    if drop is None:
+        members = by_path
+    else:               # each element of a dropped port (the keys are sorted)
+        gone = np.zeros(m + 1, dtype=bool)
+        for sided in (drop * 2, drop * 2 + 1):
+            at = np.searchsorted(keys, sided)
+            gone[np.where(keys[np.minimum(at, m - 1)] == sided, at, m)] = True
+        members = by_path[~gone[by_path]]
+    n_label, label = labels(n_ref)
+    nodes, set_of = _grouped(members, label, n_label, items)
+    if not outer:
+        return nodes, keys, set_of, None
+    mine = np.zeros(m, dtype=bool)
+    mine[inverse[:outer]] = True
+    n_label, label = labels(outer)
+    return nodes, keys, set_of, _grouped(by_path[mine[by_path]], label, n_label, items)[0]
+
+
+def _grouped(members: np.ndarray, label: np.ndarray, n_label: int,
+             items: tuple) -> tuple[Nodes, np.ndarray]:
+    """The sets of the elements ``members`` (numbers, in order of path) by their
+    ``label``, sets by their first member; ``items``: each element's port, side, path
+    and port id. Returns the sets and each element's set (-1: none)."""
+    by_rank = label[members]
     _, seen = np.unique(by_rank, return_index=True)
     set_rank = np.full(n_label, -1, dtype=np.int64)
     set_rank[by_rank[np.sort(seen)]] = np.arange(len(seen))
-    of_member = set_rank[label[kept]]
-    mem = kept[np.lexsort((rank[kept], of_member))]
+    of_member = set_rank[by_rank]
+    mem = members[np.argsort(of_member, kind="stable")]
     ptr = _starts(np.bincount(of_member, minlength=len(seen)), total=True)
-    nodes = Nodes(_objects(ports)[mem].tolist(), side[first][mem],
-                  _objects(paths)[mem].tolist(), port_ids[mem], ptr)
-    return nodes, keys, set_rank[label]
+    ports, side, paths, port_ids = items
+    return Nodes(ports[mem].tolist(), side[mem], paths[mem].tolist(), port_ids[mem],
+                 ptr), set_rank[label]
 
 
 def joined_nodes(flat, groups: list[list]) -> bool:
@@ -184,9 +206,9 @@ def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list
     by set (`folding.join_planned`, `joined_nodes`): the model's own sets and its signal
     sets ``signals`` (each recorded by ``signal_set``) in their places, then the nodes'
     aliases and flow sums; return them. The nodes are the connected components of the
-    model's elements, each plan's sets instance by instance (the ports of a class's
-    instances gathered name by name, not member by member) and each folded port's two
-    elements, its own left out. None, having changed nothing, when a port is read by an
+    model's elements and each plan's sets, instance by instance (the ports of a class's
+    instances gathered name by name, not member by member), each joined to its folded
+    port's inside element; the folded ports are left out. None, having changed nothing, when a port is read by an
     equation, a plan's set holds a port folded itself (a subsystem within a subsystem),
     or a member was not bound in bulk: the caller then goes set by set."""
     if len(planned.where) != len(folded):
@@ -194,12 +216,13 @@ def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list
     written = _elements(joined)
     if written is None:
         return None
-    outer_refs, outer_side, outer_head = written
-    refs, sides, heads = list(outer_refs), [outer_side], [outer_head]
+    refs, side, head = written
+    n_outer = len(refs)
+    sides, heads = [side], [head]
     flows: dict[int, tuple] = {}         # id(folded port) -> its inside members' ports
 
-    def add(col: list, outside: bool, at: int) -> None:
-        sides.append(np.full(len(col), outside))
+    def add(col: list, at: int) -> None:      # inside elements, joined to col[k] at + k
+        sides.append(np.zeros(len(col), dtype=bool))
         heads.append(np.arange(at, at + len(col)))
         refs.extend(col)
 
@@ -214,30 +237,26 @@ def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list
                 return None             # a subsystem's port within a subsystem's set
             at = len(refs)
             if owner is not None:
+                # the set joined to its port's inside element: a folded port's two
+                # elements are one node (its outside element is met nowhere else)
                 own = list(map(itemgetter(owner), children))
-                add(own, True, at)
+                add(own, at)
                 flows.update(zip(map(id, own), zip(*cols)))
             for col in cols:
-                add(col, False, at)
-    ports = list(folded.values())       # each one's two elements joined: one node
-    at = len(refs)
-    add(ports, False, at)
-    add(ports, True, at)
+                add(col, at)
+    ports = list(folded.values())
     got = _components(refs, np.concatenate(sides), np.concatenate(heads),
-                      np.fromiter(folded, dtype=np.int64, count=len(folded)))
+                      np.fromiter(folded, dtype=np.int64, count=len(folded)),
+                      n_outer)
     if got is None:
         return None
-    nodes, keys, set_of = got
+    nodes, keys, set_of, outer = got
     rows = _bulk_rows(nodes.ports)
-    if rows is None:
+    links = None if rows is None else _links(nodes, rows)
+    if links is None:
         return None
-    links = _links(nodes, rows)
-    outer = _components(outer_refs, outer_side, outer_head)
-    if links is None or outer is None:
-        return None
-    outer = outer[0]
-    outside = np.fromiter(map(id, ports), dtype=np.int64, count=len(ports)) * 2 + 1
-    node_of = set_of[np.searchsorted(keys, outside)]
+    inside = np.fromiter(map(id, ports), dtype=np.int64, count=len(ports)) * 2
+    node_of = set_of[np.searchsorted(keys, inside)]
     if node_of.size and node_of.min() < 0:
         return None                     # (every node holds a port that is no plan's)
     firsts = [nodes.ports[k] for k in nodes.ptr[node_of].tolist()]
