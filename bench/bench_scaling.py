@@ -663,8 +663,11 @@ def _cachegrind(n: int, stop: str, folder: str) -> tuple[dict, dict]:
            *[f"--{k}={v}" for k, v in COUNTED_CACHES.items()],
            f"--cachegrind-out-file={out}", sys.executable, __file__,
            "--counted-one", str(n), stop]
-    # string hashing seeded alike in every process: the same dictionary layouts
-    env = {**os.environ, "PYTHONHASHSEED": "0"}
+    # string hashing seeded alike in every process: the same dictionary layouts; one
+    # BLAS thread: OpenBLAS's idle threads spin at start-up and exit, 250-300 M
+    # instructions that vary by 20 M or more from one process to the next
+    env = {**os.environ, "PYTHONHASHSEED": "0", "OPENBLAS_NUM_THREADS": "1",
+           "OMP_NUM_THREADS": "1"}
     done = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if done.returncode != 0:
         tail = "\n".join(done.stderr.strip().splitlines()[-5:])

@@ -11,6 +11,7 @@ import json
 import math
 import shutil
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -230,6 +231,28 @@ def test_cachegrind_totals_reads_events_and_summary(bench_scaling, tmp_path):
     out.write_text("events: Ir D1mr\n")
     with pytest.raises(ValueError, match="not a complete cachegrind output"):
         bench_scaling.cachegrind_totals(out)
+
+
+def test_counted_processes_run_alike(bench_scaling, monkeypatch, tmp_path):
+    """Each ``--counted`` process under cachegrind is seeded alike and runs one BLAS
+    thread (idle OpenBLAS threads spin a varying count of instructions), the caller's
+    other settings, such as ``OPENBLAS_CORETYPE``, left as they are."""
+    seen = {}
+
+    def run(cmd, env, **kwargs):
+        seen.update(cmd=cmd, env=env)
+        out = next(a.split("=", 1)[1] for a in cmd if a.startswith("--cachegrind-out-file="))
+        with open(out, "w") as f:
+            f.write("events: Ir D1mr DLmr DLmw\nsummary: 1 2 3 4\n")
+        return subprocess.CompletedProcess(cmd, 0, '{"N": 10, "stop": "build"}\n', "")
+
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Haswell")
+    monkeypatch.setattr(bench_scaling.subprocess, "run", run)
+    line, totals = bench_scaling._cachegrind(10, "build", str(tmp_path))
+    assert line["stop"] == "build" and totals["Ir"] == 1
+    env = seen["env"]
+    assert env["PYTHONHASHSEED"] == "0" and env["OPENBLAS_NUM_THREADS"] == "1"
+    assert env["OPENBLAS_CORETYPE"] == "Haswell"
 
 
 def test_compile_counted_subtracts_the_build_and_divides_by_equations(bench_scaling):
