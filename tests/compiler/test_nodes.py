@@ -238,6 +238,16 @@ def driven_drives() -> mt.System:
     return m
 
 
+def drives_and_stage() -> mt.System:
+    """`two_drives` with a `Stage` across the supply, its output open: two classes
+    planned in one model."""
+    m = two_drives()
+    s = m.add("filter", Stage(R=4.0, C=1e-3))
+    m.connect(s.p, m.src.p)
+    m.connect(m.g.port, s.gnd)
+    return m
+
+
 def floating_stages() -> mt.System:
     """Stages without a reference."""
     m = mt.System("floating")
@@ -279,9 +289,9 @@ def flattened_planned(monkeypatch, build, *, arrays: bool,
 
 @pytest.mark.parametrize("build", [
     lambda: stages(5), lambda: shuffled_stages(1), lambda: shuffled_stages(2), two_drives,
-    driven_drives, floating_stages],
+    driven_drives, drives_and_stage, floating_stages],
     ids=["stages", "stages_shuffled_1", "stages_shuffled_2", "two_drives", "with_signals",
-         "no_reference"])
+         "two_classes", "no_reference"])
 def test_nodes_joined_on_arrays_give_the_flat_model_of_set_by_set(build, monkeypatch):
     """Subsystems wired by their plan: the nodes joined across their folded ports formed
     on arrays, joined set by set and read on arrays, and all set by set."""
