@@ -6,8 +6,8 @@ of the graph of the connects' elements (a port with its side,
 path, the inside element first, sets by their first member (`physical_nodes`); the
 signal sets, formed set by set, take their places among them. With subsystems wired by
 their class's plan (:mod:`mechatron.compiler.folding`), the nodes are the components of
-that graph with each plan's sets added instance by instance and each folded port's two
-elements joined, the folded ports themselves left out (`planned_nodes`), as
+that graph with each plan's sets added instance by instance, each joined to its folded
+port's inside element, the folded ports themselves left out (`planned_nodes`), as
 `folding.join_planned` joins them set by set. The sets' records, aliases and flow sums
 are read off arrays of the members' rows, for these nodes as for those joined set by set
 (`joined_nodes`), and the flat model is the same as set by set
@@ -207,10 +207,11 @@ def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list
     sets ``signals`` (each recorded by ``signal_set``) in their places, then the nodes'
     aliases and flow sums; return them. The nodes are the connected components of the
     model's elements and each plan's sets, instance by instance (the ports of a class's
-    instances gathered name by name, not member by member), each joined to its folded
-    port's inside element; the folded ports are left out. None, having changed nothing, when a port is read by an
-    equation, a plan's set holds a port folded itself (a subsystem within a subsystem),
-    or a member was not bound in bulk: the caller then goes set by set."""
+    instances gathered name by name, not member by member), each set joined to its
+    folded port's inside element; the folded ports are left out. None, having changed
+    nothing, when a port is read by an equation, a plan's set holds a port folded itself
+    (a subsystem within a subsystem), or a member was not bound in bulk: the caller then
+    goes set by set."""
     if len(planned.where) != len(folded):
         return None                     # a port read by an equation: a member itself
     written = _elements(joined)
