@@ -227,10 +227,10 @@ def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list
         heads.append(np.arange(at, at + len(col)))
         refs.extend(col)
 
-    by_plan: dict = {}
+    by_plan: dict = {}                  # each plan's instances (a plan per class)
     for el, plan in planned.values():
-        by_plan.setdefault(id(plan), (plan, []))[1].append(el)
-    for plan, instances in by_plan.values():
+        by_plan.setdefault(plan, []).append(el)
+    for plan, instances in by_plan.items():
         children = list(map(_CHILDREN, instances))
         for owner, names_list in plan.sets:
             cols = [_ports_at(children, names) for names in names_list]
@@ -263,7 +263,7 @@ def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list
     firsts = [nodes.ports[k] for k in nodes.ptr[node_of].tolist()]
     insides = list(map(flows.__getitem__, folded))
     _in_order(flat, outer, _set_records(outer), [], np.zeros(0, dtype=np.intp), signals,
-              signal_set)
+              signal_set)   # the model's own sets, no alias of their own
     flat.aliases += links[0]
     _sums(flat, *links[2:])
     return Joined(outer, nodes, firsts, insides)
@@ -312,12 +312,9 @@ def _record(flat, nodes: Nodes, rows: np.ndarray, signals: list = (), signal_set
     if links is None:
         return False
     if records:
-        sets = _set_records(nodes)
-        if signals:
-            _in_order(flat, nodes, sets, links[0], links[1], signals, signal_set)
-        else:
-            flat.connection_sets += sets
-    if not (records and signals):
+        _in_order(flat, nodes, _set_records(nodes), links[0], links[1], signals,
+                  signal_set)
+    else:
         flat.aliases += links[0]
     _sums(flat, *links[2:])
     return True
@@ -392,11 +389,15 @@ def _links(nodes: Nodes, rows: np.ndarray) -> tuple | None:
     return aliases, alias_set, sums, sign, origins, uniform
 
 
-def _in_order(flat, nodes: Nodes, sets: list, aliases: list, alias_set: np.ndarray,
+def _in_order(flat, nodes: Nodes, sets: list, aliases: list, alias_set: np.ndarray | None,
               signals: list, signal_set) -> None:
     """The physical sets' records and aliases (``aliases[k]`` of set ``alias_set[k]``)
     and the signal sets (each recorded by ``signal_set``) in the order of their first
     members, as set by set."""
+    if not signals:             # the physical sets are in that order already
+        flat.connection_sets += sets
+        flat.aliases += aliases
+        return
     ptr = nodes.ptr.tolist()
     first = [(nodes.paths[a], bool(nodes.outside[a])) for a in ptr[:-1]]
     first += [(cset.members[0].path, cset.members[0].outside) for cset in signals]
