@@ -71,7 +71,9 @@ def two_drives():
     return m
 
 
-def assert_same(folded, plain, t_end, **options):
+def assert_same(folded, plain, t_end, tol=1e-9, **options):
+    """The same names, units, states and flat counts, and every logged value within
+    ``tol`` of its signal's scale, integrated with ``options``."""
     assert folded.names == plain.names
     assert folded.units == plain.units
     assert sorted(folded.state_names) == sorted(plain.state_names)
@@ -86,7 +88,7 @@ def assert_same(folded, plain, t_end, **options):
     np.testing.assert_allclose(a.t, b.t)
     for name in plain.names:
         scale = max(1.0, float(np.max(np.abs(b[name]))))
-        np.testing.assert_allclose(a[name], b[name], rtol=0, atol=1e-9 * scale,
+        np.testing.assert_allclose(a[name], b[name], rtol=0, atol=tol * scale,
                                    err_msg=name)
 
 

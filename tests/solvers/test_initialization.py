@@ -84,18 +84,21 @@ def test_a_converged_initial_point_solves_the_algebraic_equation():
     cm = mt.compile_model(ImplicitRoot())
     assert cm.alg_names == ["y"]
     res = mt.simulate(cm, 0.1)
-    # x has no priority: the least-deviation point moves x and y together onto the curve
+    # nothing asks x to move: it keeps its start value, and y solves the loop from its
+    # guess (a start value of its own, 0.3, that the root 0.68 does not keep)
     x0, y0 = res["x"][0], res["y"][0]
+    assert x0 == 0.5
     assert y0 + np.exp(y0) == pytest.approx(2 + x0, abs=1e-8)
     assert res.initialization == []
 
 
 def test_an_initial_point_that_does_not_converge_names_the_equation_not_a_conflict():
     # y^2 + 1 = 0.1 sin(x) has no real root: no target conflicts, the solve cannot
-    # converge, and the message says so instead of "conflicting targets: unknown"
+    # converge, and the message says so instead of "conflicting targets: unknown"; x is
+    # held at its start value, so the least residual is 1 - 0.1 sin(0.5) = 0.952 (at y = 0)
     with pytest.raises(InitializationError,
                        match=r"'NoRealRoot': the initial point did not converge at t0 = 0 s "
                              r"\(IPOPT: .*\); largest residuals: algebraic equation 1 "
-                             r"\(for y\) \(residual 0\.9\)\. Give start values closer") as e:
+                             r"\(for y\) \(residual 0\.952\)\. Give start values closer") as e:
         mt.simulate(NoRealRoot(), 0.1)
     assert e.value.variables == ["y"]

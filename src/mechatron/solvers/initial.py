@@ -1,11 +1,13 @@
 """Consistent initialization (docs/compiler.md, docs/solvers.md).
 
-States take their start values. When an algebraic loop remains, or a start value targets a
-variable that is not a state (the velocity of the second of two geared inertias, the
-voltage of the second of two parallel capacitors), the initial point solves a
-least-deviation problem: the DAE constraints and every ``high`` target hold exactly, ``low``
-targets as closely as possible, and ``none`` start values only regularise. Conflicting
-``high`` targets are found from the dependent rows of the constraint Jacobian and named.
+States take their start values, also when an algebraic loop remains: its algebraic unknowns
+are then solved with the states held (their start values only guesses). When a start value
+targets a variable that is not a state (the velocity of the second of two geared inertias,
+the voltage of the second of two parallel capacitors) or initial equations are given, the
+initial point solves a least-deviation problem: the DAE constraints and every ``high``
+target hold exactly, ``low`` targets as closely as possible, and ``none`` start values only
+regularise. Conflicting ``high`` targets are found from the dependent rows of the
+constraint Jacobian and named.
 """
 
 from __future__ import annotations
@@ -115,9 +117,15 @@ def _entry(name, target, priority, value) -> dict:
 
 def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
     nx, nz, nr = cm.nx, cm.nz, cm.nr
-    w = ca.SX.sym("w", nx + nz)
-    xs = w[:nx] if nx else ca.SX(0, 1)
-    zs = w[nx:] if nz else ca.SX(0, 1)
+    # with no initial equation and no target on another variable, nothing asks a state to
+    # leave its start value: the states keep them, as in a model without an algebraic
+    # loop, and the loop is solved for the algebraic unknowns alone (were the states
+    # free, the guesses of the algebraic unknowns would pull them: the same network
+    # would start elsewhere as its equations were torn differently)
+    held = cm.f_init is None and not cm.targets
+    w = ca.SX.sym("w", nz if held else nx + nz)
+    xs = ca.DM(x0) if held else w[:nx] if nx else ca.SX(0, 1)
+    zs = w if held else w[nx:] if nz else ca.SX(0, 1)
     X = ca.vertcat(xs, ca.DM(modes), ca.DM.zeros(nr), ca.DM.ones(nr) * t0)
     y = cm.f_out(t0, X, zs, ca.DM(p))
     hard, hard_names, soft = [], [], []
@@ -129,7 +137,7 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
         hard.append(cm.f_init(t0, X, zs, ca.DM(p)))
         hard_names += [f"initial equation '{text}'" for text in
                        cm.report.get("initial_equations", [])]
-    for k, name in enumerate(cm.state_names):
+    for k, name in enumerate(cm.state_names if not held else ()):
         prio = cm.x_priority[k]
         if prio == "high":
             hard.append(xs[k] - x0[k])
@@ -148,10 +156,10 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
             soft.append(y[idx] - value)
     g = ca.vertcat(*hard) if hard else ca.SX(0, 1)
     f = ca.sumsqr(ca.vertcat(*soft)) if soft else ca.SX(0)
-    w0 = np.concatenate([x0, z0])
+    w0 = z0 if held else np.concatenate([x0, z0])
     ng = g.numel()
     g_fun = ca.Function("init_g", [w], [g])
-    if ng > nx + nz:
+    if ng > w.numel():
         # more hard targets than unknowns: they can only hold if they agree; the least
         # squares point tells, and the dependent rows name the conflict
         from scipy.optimize import least_squares
@@ -177,7 +185,7 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
                 "Lower the priority of one of them, or make them consistent.",
                 variables=[s.split(" = ")[0] for s in suspects], path=cm.name)
         _not_converged(cm, t0, resid, hard_names, status, nx)
-    return wv[:nx], wv[nx:]
+    return (x0, wv) if held else (wv[:nx], wv[nx:])
 
 
 def _not_converged(cm, t0, resid, names, status, nx):
