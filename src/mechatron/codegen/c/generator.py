@@ -218,6 +218,16 @@ def _header_line(names) -> str:
     return buf.getvalue()
 
 
+#: characters of the CSV header per C string literal (at most 4 bytes each in UTF-8: under
+#: the 4095 a C99 compiler must take)
+HEADER_PIECE = 500
+
+
+def _pieces(text: str) -> list[str]:
+    """``text`` in pieces of at most `HEADER_PIECE` characters."""
+    return [text[k:k + HEADER_PIECE] for k in range(0, len(text), HEADER_PIECE)] or [""]
+
+
 def _parameter_bounds(cm: CompiledModel, i: int) -> tuple[float, float]:
     low, high = cm.param_bounds[i] if cm.param_bounds else (None, None)
     return (-np.inf if low is None else float(low), np.inf if high is None else float(high))
@@ -268,7 +278,7 @@ def template_values(prep: Prepared) -> dict:
         output_names=c_array(c_string(n) for n in cm.names),
         parameter_declarations="\n".join(pdecl), parameter_definitions="\n".join(pdef),
         output_declarations="\n".join(ydecl), output_definitions="\n".join(ydef),
-        csv_header=c_string(_header_line(cm.names)),
+        csv_header=c_array(map(c_string, _pieces(_header_line(cm.names)))),
         ninputs=len(cm.input_names), input_defines="".join(i + "\n" for i in inputs),
         step_x_out="m->x" if in_place else "m->x_next",
         step_copy=("/* the step reads the whole state before writing it: updated in place */"
