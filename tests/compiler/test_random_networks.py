@@ -5,7 +5,8 @@ on arrays and set by set, and drawn in two orders; every way gives the same mode
 same logged values, and these follow the network solved by hand (modified nodal
 analysis, integrated exactly).
 
-A network has a source behind a resistor (a constant voltage, or one a Step drives), a
+A network has a source behind a resistor (a constant voltage, one a Step drives, or one
+a Pulse drives: five events the solver locates), a
 leak resistor from every node to the reference, and instances of two to four subsystem
 classes made for the seed: each with two or three pins (the third sometimes open
 outside), parameters passed on to its parts (unchanged, scaled, or not at all), resistor,
@@ -37,6 +38,8 @@ from tests.compiler.test_nodes import flattened, flattened_planned
 SEEDS = [*range(12), 32, 142]
 #: seeds drawn with loops of capacitors and cut sets of inductors (index reduction)
 LOOP_SEEDS = range(6)
+#: seeds drawn with the source driven by a pulse train
+PULSE_SEEDS = range(4)
 T_END = 0.02
 
 _R = (0.5, 1.0, 2.0, 5.0)
@@ -174,10 +177,26 @@ def _joined_to_another(pin: str, pins: list, wires: dict, specs: dict) -> bool:
     return any(other in seen for other in pins if other != pin)
 
 
-def random_network(seed: int, order: int = 0, loops: bool = False):
+#: the pulse train of ``random_network(pulses=True)``: five edges in T_END
+PULSE = {"period": T_END / 3, "width": 0.4, "delay": T_END / 10}
+
+
+def _pulse_stretches(amplitude: float) -> list[tuple[float, float]]:
+    """The pulse train `PULSE` as (from time, value) stretches up to T_END."""
+    out, k = [(0.0, 0.0)], 0
+    while True:
+        on = PULSE["delay"] + k * PULSE["period"]
+        if on >= T_END:
+            return out
+        out += [(on, amplitude), (on + PULSE["width"] * PULSE["period"], 0.0)]
+        k += 1
+
+
+def random_network(seed: int, order: int = 0, loops: bool = False, pulses: bool = False):
     """The network of ``seed`` and a builder of it; ``order`` shuffles the order its
     parts are added and its connections written (ports reversed, nodes written as one
-    connect or as a chain of two-port connects), not the network."""
+    connect or as a chain of two-port connects), not the network; ``pulses`` drives the
+    source by a pulse train (five events) instead of what the seed draws."""
     rng = random.Random(seed)
     classes: list[type] = []
     for k in range(rng.choice((2, 3, 4))):
@@ -189,19 +208,23 @@ def random_network(seed: int, order: int = 0, loops: bool = False):
              ("gnd", el.ElectricalReference, [("g", "port")])]
     # the network as `netlist` reads it: (path, kind, value, p node, n node) of the parts
     # at the top, (path, class, given Rb, pin -> node) of the instances, the source's
-    # voltage before and after T_END / 4
+    # voltage as (from time, value) stretches
     top = [("rs", "R", 0.5, "s", "m0")]
     instances = []
-    if rng.random() < 0.3:      # a source a step drives: signal sets among the nodes
-        parts += [("src", el.ControlledVoltageSource, [("g", "n"), ("s", "p")]),
-                  ("step", lambda: blocks.Step(t_step=T_END / 4, initial=1.0, final=volts),
-                   [])]
-        signals = [(("step", "y"), ("src", "u"))]
-        source = (1.0, volts)
+    if rng.random() < 0.3 or pulses:    # a driven source: signal sets among the nodes
+        parts.append(("src", el.ControlledVoltageSource, [("g", "n"), ("s", "p")]))
+        signals = [(("drive", "y"), ("src", "u"))]
+        if pulses:
+            parts.append(("drive", lambda: blocks.Pulse(amplitude=volts, **PULSE), []))
+            source = _pulse_stretches(volts)
+        else:
+            parts.append(("drive", lambda: blocks.Step(t_step=T_END / 4, initial=1.0,
+                                                       final=volts), []))
+            source = [(0.0, 1.0), (T_END / 4, volts)]
     else:
         parts.append(("src", lambda: el.DCVoltageSource(V=volts), [("g", "n"), ("s", "p")]))
         signals = []
-        source = (volts, volts)
+        source = [(0.0, volts)]
     used = set()
     for k in range(rng.choice((2, 3, 4, 5, 6))):
         cls = rng.choice(classes)
@@ -294,12 +317,12 @@ def netlist(top: list, instances: list) -> list[tuple]:
     return out
 
 
-def nodal_solution(parts: list, source: tuple, t: np.ndarray) -> dict[str, np.ndarray]:
+def nodal_solution(parts: list, source: list, t: np.ndarray) -> dict[str, np.ndarray]:
     """The network solved by hand: modified nodal analysis with each capacitor's voltage
     and each inductor's current as states, the node voltages, capacitor currents and
     the source's current solved from them (a linear system), the states' linear ODE
     integrated exactly (the matrix exponential of each stretch of constant source
-    voltage). Returns each part's pin voltages and current at the times ``t``, by the
+    voltage, ``source``: (from time, value) in order). Returns each part's pin voltages and current at the times ``t``, by the
     names Mechatron logs. A capacitor or inductor starts at 0, as their start values."""
     nodes = sorted({n for *_, a, b in parts for n in (a, b)} - {"g"})
     at = {n: k for k, n in enumerate(nodes)}
@@ -347,17 +370,18 @@ def nodal_solution(parts: list, source: tuple, t: np.ndarray) -> dict[str, np.nd
                 P[nc + j, at[node]] = sign / value
     F, g = P @ MN, P @ Mc
     states = np.zeros((t.size, nc + nl))
-    t_step = T_END / 4
-    s0 = np.zeros(nc + nl)
+    starts = np.array([a for a, _ in source])
     for k, tk in enumerate(t):
-        # exact: the ODE s' = F s + g V, V constant on each side of the step
-        first = min(tk, t_step)
-        s = _exact(F, g * source[0], s0, first)
-        if tk > t_step:
-            s = _exact(F, g * source[1], s, tk - t_step)
+        # exact: the ODE s' = F s + g V, V constant on each stretch
+        s = np.zeros(nc + nl)
+        for j, (begin, value) in enumerate(source):
+            if begin >= tk:
+                break
+            end = min(tk, source[j + 1][0]) if j + 1 < len(source) else tk
+            s = _exact(F, g * value, s, end - begin)
         states[k] = s
-    # the step's value from t_step on (blocks.Step: final where t_step <= t)
-    volts = np.where(t >= t_step, source[1], source[0])
+    # a stretch's value from its first instant on (blocks.Step: final where t_step <= t)
+    volts = np.array([v for _, v in source])[np.searchsorted(starts, t, side="right") - 1]
     y = states @ MN.T + np.outer(volts, Mc)
     v = np.zeros((t.size, n + 1))
     v[:, :n] = y[:, :n]              # the last column: the reference, 0
@@ -425,10 +449,12 @@ def test_a_network_drawn_in_another_order_has_the_same_states_and_values(seed, l
                                    err_msg=name)
 
 
-@pytest.mark.parametrize("seed", SEEDS)
-def test_random_networks_follow_the_nodal_analysis(seed):
-    """Every pin voltage and part current against the network solved by hand."""
-    build = random_network(seed)
+@pytest.mark.parametrize("seed,pulses", [(s, False) for s in SEEDS] +
+                         [(s, True) for s in PULSE_SEEDS])
+def test_random_networks_follow_the_nodal_analysis(seed, pulses):
+    """Every pin voltage and part current against the network solved by hand; with
+    ``pulses``, across the five edges of a pulse train (events the solver locates)."""
+    build = random_network(seed, pulses=pulses)
     res = mt.simulate(mt.compile_model(build()), T_END, rtol=1e-10, atol=1e-12, log="all",
                       t_out=np.linspace(0.0, T_END, 41))
     exact = nodal_solution(build.netlist(), build.source, res.t)
