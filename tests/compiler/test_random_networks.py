@@ -5,13 +5,13 @@ on arrays and set by set, and drawn in two orders; every way gives the same mode
 same logged values, and these follow the network solved by hand (modified nodal
 analysis, integrated exactly).
 
-A network has a source behind a resistor (a constant voltage, one a Step drives, or one
-a Pulse drives: five events the solver locates), a
-leak resistor from every node to the reference, and instances of two to four subsystem
-classes made for the seed: each with two or three pins (the third sometimes open
-outside), parameters passed on to its parts (unchanged, scaled, or not at all), resistor,
-series RC and series RL branches between its pins and nodes of its own, and in some
-seeds an instance of an earlier class as a part (a plan within a plan). Every capacitor is
+A network has a source behind a resistor (a constant voltage, one a Step drives, or one a
+Pulse drives: five events the solver locates), a leak resistor from every node to the
+reference, and instances of two to four subsystem classes made for the seed: each with
+two or three pins (the third sometimes open outside), parameters passed on to its parts
+(unchanged, scaled, or not at all), resistor, series RC and series RL branches between
+its pins and nodes of its own, and in some seeds an instance of an earlier class as a
+part (a plan within a plan). Every capacitor is
 in series with a resistor, every node meets a resistor and a pin left open is joined to
 another by resistors and capacitors, so no network needs index reduction and the exact
 solution is a linear ODE in the capacitor voltages and inductor currents. With
