@@ -241,6 +241,6 @@ def test_relative_difference_scales_each_variable_by_its_kind():
                      names, units)
     assert max_relative_difference(a, b) == pytest.approx(2e-15 / 4.0)
     # a voltage off by 1e-3 of the largest voltage is 1e-3 off, whatever the currents
-    c = mt.SimResult(t, np.array([[2.0, 3.0, 4.0], [1e-15, -2e-15, 0.0], [1.0, 1.001, 1.0]]),
-                     names, units)
+    c = mt.SimResult(t, np.array([[2.0, 3.0, 4.0], [1e-15, -2e-15, 0.0],
+                                  [1.0, 1.001, 1.0]]), names, units)
     assert max_relative_difference(c, b) == pytest.approx(1e-3)

@@ -1,9 +1,9 @@
-"""Random electrical networks built from random subsystem classes (mechatron.compiler.folding,
-mechatron.compiler.nodes, mechatron.solvers.initial): each is compiled with its
-subsystems wired by their plans and with every port written out, with its nodes formed
-on arrays and set by set, and drawn in two orders; every way gives the same model and the
-same logged values, and these follow the network solved by hand (modified nodal
-analysis, integrated exactly).
+"""Random electrical networks built from random subsystem classes
+(mechatron.compiler.folding, mechatron.compiler.nodes, mechatron.solvers.initial): each
+is compiled with its subsystems wired by their plans and with every port written out,
+with its nodes formed on arrays and set by set, and drawn in two orders; every way gives
+the same model and the same logged values, and these follow the network solved by hand
+(modified nodal analysis, integrated exactly).
 
 A network has a source behind a resistor (a constant voltage, one a Step drives, or one a
 Pulse drives: five events the solver locates), a leak resistor from every node to the
@@ -235,7 +235,8 @@ def random_network(seed: int, order: int = 0, loops: bool = False, pulses: bool 
         if len(pins) == 3 and rng.random() < 0.2 and cls.may_open[pins[-1]]:
             attached.pop()                  # a pin left open outside
         parts.append((f"u{k}", lambda cls=cls, given=given: cls(**given), attached))
-        instances.append((f"u{k}", cls, given.get("Rb"), {pin: node for node, pin in attached}))
+        instances.append((f"u{k}", cls, given.get("Rb"),
+                          {pin: node for node, pin in attached}))
     met = {node for _, _, attached in parts for node, _ in attached}
     for node in nodes[1:]:                  # a leak from every node met to the reference
         if node in met:
@@ -322,8 +323,9 @@ def nodal_solution(parts: list, source: list, t: np.ndarray) -> dict[str, np.nda
     and each inductor's current as states, the node voltages, capacitor currents and
     the source's current solved from them (a linear system), the states' linear ODE
     integrated exactly (the matrix exponential of each stretch of constant source
-    voltage, ``source``: (from time, value) in order). Returns each part's pin voltages and current at the times ``t``, by the
-    names Mechatron logs. A capacitor or inductor starts at 0, as their start values."""
+    voltage, ``source``: (from time, value) in order). Returns each part's pin
+    voltages and current at the times ``t``, by the names Mechatron logs. A capacitor
+    or inductor starts at 0, as their start values."""
     nodes = sorted({n for *_, a, b in parts for n in (a, b)} - {"g"})
     at = {n: k for k, n in enumerate(nodes)}
     caps = [q for q in parts if q[1] == "C"]
@@ -399,7 +401,8 @@ def nodal_solution(parts: list, source: list, t: np.ndarray) -> dict[str, np.nda
 
 
 def _exact(F: np.ndarray, f: np.ndarray, s0: np.ndarray, dt: float) -> np.ndarray:
-    """``s(dt)`` of ``s' = F s + f`` from ``s0``: the exponential of the augmented matrix."""
+    """``s(dt)`` of ``s' = F s + f`` from ``s0``: the exponential of the augmented
+    matrix."""
     m = F.shape[0]
     A = np.zeros((m + 1, m + 1))
     A[:m, :m], A[:m, m] = F * dt, f * dt
