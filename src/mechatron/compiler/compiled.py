@@ -114,6 +114,28 @@ class CompiledModel:
         return self.nx + 3 * self.nr
 
     # -- parameters -----------------------------------------------------------------------
+    def binding_of(self, name: str) -> str:
+        """A sentence for messages if ``name`` is a part's parameter bound to its parent's
+        (``r = Resistor(R=R)`` in the parent's class; not a parameter of the compiled
+        model of its own), naming the one to set instead; else ``""``."""
+        bound = self._cache.get("bindings")
+        if bound is None:
+            bound = self._cache["bindings"] = {}
+            for owner, key, parent, source in self.report.get("bindings", ()):
+                if key is None:             # an expression: its text says where
+                    bound[owner] = (source, None)
+                else:
+                    bound[f"{owner}.{key}" if owner else key] = (
+                        f"{source} of '{parent or self.name}'",
+                        f"{parent}.{source}" if parent else source)
+        got = bound.get(name)
+        if got is None:
+            return ""
+        text, target = got
+        return (f"'{name}' is bound to {text} (a part's parameter its parent passes on) and "
+                "has no value of its own: " + (f"set '{target}' instead." if target else
+                                               "set the parameters it is written in."))
+
     def parameter_vector(self, params: dict | None = None) -> np.ndarray:
         """Default parameter values with ``params`` (path -> value or quantity) applied."""
         p = self.p0.copy()
@@ -124,6 +146,10 @@ class CompiledModel:
             index = self._cache["pindex"] = {n: i for i, n in enumerate(self.param_names)}
         unknown = [k for k in params if k not in index]
         if unknown:
+            for k in unknown:
+                why = self.binding_of(k)
+                if why:
+                    raise ParameterError(f"model '{self.name}': {why}", path=self.name)
             import difflib
             hints = {k: difflib.get_close_matches(k, self.param_names, 3) for k in unknown}
             text = "; ".join(f"'{k}'" + (f" (did you mean {', '.join(v)}?)" if v else "")

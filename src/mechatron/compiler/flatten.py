@@ -704,6 +704,14 @@ class FlatModel:
                 out[item.name] = item
         return out
 
+    def binding_sources(self) -> list[tuple]:
+        """What each bound parameter is bound to, in plain values (for messages, kept by
+        the compiled model): ``(owner, key, parent path, parent's parameter)`` for one
+        passed on unchanged (``R=R``), ``(path, None, None, binding as written)`` for an
+        expression; no record formed, no string joined."""
+        return [(b[0], b[1], b[4], b[3].names[0]) if type(b) is tuple else
+                (b.name, None, None, b.binding) for b in self.bindings]
+
     @property
     def n_folded(self) -> int:
         """How many variables the folded ports hold."""

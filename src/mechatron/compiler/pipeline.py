@@ -413,6 +413,9 @@ def _compile(model: Component, name: str | None, dimensions: bool = True) -> Com
         "relation_labels": list(events.labels),
         "discrete": dict(flat.discrete),
         "initial_equations": [str(eq.origin) for eq in flat.initial_equations],
+        # the parameters of parts bound to their parents', for messages (CompiledModel.
+        # parameter_vector: setting one names the parameter to set instead)
+        "bindings": flat.binding_sources(),
         "external_blocks": _external_blocks(model, flat.classes),
         "timings": timings,
         "cpu_timings": cpu_timings,

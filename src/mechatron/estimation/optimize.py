@@ -159,8 +159,10 @@ class ResponseProblem:
         problems = []
         for d in self.design:
             if d.name not in pindex:
+                why = cm.binding_of(d.name) or \
+                    f"its parameters are {', '.join(cm.param_names)}."
                 problems.append(f"design variable '{d.name}' is not a parameter of "
-                                f"'{cm.name}' ({', '.join(cm.param_names)}).")
+                                f"'{cm.name}': {why}")
                 continue
             if d.initial is None:
                 d.initial = float(self.base[pindex[d.name]])

@@ -233,8 +233,10 @@ class EstimationProblem:
         problems = []
         for f in self.free:
             if f.name not in pindex:
+                why = cm.binding_of(f.name) or \
+                    f"its parameters are {', '.join(cm.param_names)}."
                 problems.append(f"free parameter '{f.name}' is not a parameter of model "
-                                f"'{cm.name}' (parameters: {', '.join(cm.param_names)}).")
+                                f"'{cm.name}': {why}")
         for lab, path in self.inputs.items():
             if path not in pindex:
                 problems.append(f"input '{lab}' drives '{path}', which is not a parameter "
