@@ -709,7 +709,7 @@ class FlatModel:
         the compiled model): ``(owner, key, parent path, parent's parameter)`` for one
         passed on unchanged (``R=R``), ``(path, None, None, binding as written)`` for an
         expression; no record formed, no string joined."""
-        return [(b[0], b[1], b[4], b[3].names[0]) if type(b) is tuple else
+        return [(b[0], b[1], b[4], b[3].parameters[0].name) if type(b) is tuple else
                 (b.name, None, None, b.binding) for b in self.bindings]
 
     @property
