@@ -27,6 +27,7 @@ import pytest
 from scipy.linalg import expm
 
 import mechatron as mt
+from mechatron.analysis.linear import linearize
 from mechatron.compiler.flatten import flatten
 from mechatron.library import blocks
 from mechatron.library import electrical as el
@@ -318,14 +319,13 @@ def netlist(top: list, instances: list) -> list[tuple]:
     return out
 
 
-def nodal_solution(parts: list, source: list, t: np.ndarray) -> dict[str, np.ndarray]:
-    """The network solved by hand: modified nodal analysis with each capacitor's voltage
-    and each inductor's current as states, the node voltages, capacitor currents and
-    the source's current solved from them (a linear system), the states' linear ODE
-    integrated exactly (the matrix exponential of each stretch of constant source
-    voltage, ``source``: (from time, value) in order). Returns each part's pin
-    voltages and current at the times ``t``, by the names Mechatron logs. A capacitor
-    or inductor starts at 0, as their start values."""
+def nodal_system(parts: list):
+    """The network by modified nodal analysis: each capacitor's voltage and each inductor's
+    current are the states ``s``, the node voltages, capacitor currents and the source's
+    current ``y`` are solved from them and the source voltage ``V`` (a linear system,
+    ``y = MN s + Mc V``), and ``s' = F s + g V``. Returns ``(F, g, MN, Mc, at, caps,
+    inds)``: ``at`` each node's row in ``y``, ``caps`` and ``inds`` the parts in the
+    order of the states."""
     nodes = sorted({n for *_, a, b in parts for n in (a, b)} - {"g"})
     at = {n: k for k, n in enumerate(nodes)}
     caps = [q for q in parts if q[1] == "C"]
@@ -370,7 +370,17 @@ def nodal_solution(parts: list, source: list, t: np.ndarray) -> dict[str, np.nda
         for node, sign in ((a, 1.0), (b, -1.0)):
             if node != "g":
                 P[nc + j, at[node]] = sign / value
-    F, g = P @ MN, P @ Mc
+    return P @ MN, P @ Mc, MN, Mc, at, caps, inds
+
+
+def nodal_solution(parts: list, source: list, t: np.ndarray) -> dict[str, np.ndarray]:
+    """The network solved by hand (`nodal_system`), the states' linear ODE integrated
+    exactly (the matrix exponential of each stretch of constant source voltage,
+    ``source``: (from time, value) in order). Returns each part's pin voltages and
+    current at the times ``t``, by the names Mechatron logs. A capacitor or inductor
+    starts at 0, as their start values."""
+    F, g, MN, Mc, at, caps, inds = nodal_system(parts)
+    n, nc, nl = len(at), len(caps), len(inds)
     states = np.zeros((t.size, nc + nl))
     starts = np.array([a for a, _ in source])
     for k, tk in enumerate(t):
@@ -466,3 +476,35 @@ def test_random_networks_follow_the_nodal_analysis(seed, pulses):
         scale = max(1.0, float(np.max(np.abs(values))))
         np.testing.assert_allclose(res[name], values, rtol=0, atol=1e-7 * scale,
                                    err_msg=name)
+
+
+@pytest.mark.parametrize("seed", [s for s in SEEDS if s < 12])
+def test_random_networks_linearize_to_the_nodal_system(seed):
+    """The linearization from the source's voltage to every node's voltage: the same
+    poles and the same steady-state gains as the network solved by hand (where there is
+    a steady state: a node that capacitors alone join to the rest keeps its charge, a
+    pole at 0)."""
+    build = random_network(seed)
+    if len(build.source) > 1:
+        pytest.skip("a driven source: its voltage is not a parameter")
+    cm = mt.compile_model(build())
+    F, g, MN, Mc, at, caps, inds = nodal_system(build.netlist())
+    pins = {}                            # one logged pin voltage per node
+    for path, _, _, a, b in build.netlist():
+        pins.setdefault(a, f"{path}.p.v")
+        pins.setdefault(b, f"{path}.n.v")
+    nodes = [n for n in at if n in pins]
+    sys = linearize(cm, inputs=["src.V"], outputs=[pins[n] for n in nodes])
+    A, B, C, D = (np.asarray(x) for x in (sys.A, sys.B, sys.C, sys.D))
+    assert A.shape == F.shape
+    if F.size:
+        poles = np.sort_complex(np.linalg.eigvals(F))
+        np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(A)), poles,
+                                   rtol=1e-8, atol=1e-8 * np.max(np.abs(poles)))
+        if np.min(np.abs(poles)) <= 1e-9 * np.max(np.abs(poles)):
+            return                       # a charge kept: no steady state to compare
+        steady = MN @ np.linalg.solve(F, -g) + Mc
+        gain = (C @ np.linalg.solve(A, -B) + D).ravel()
+    else:                                # no states: the resistive network's gains
+        steady, gain = Mc, D.ravel()
+    np.testing.assert_allclose(gain, [steady[at[n]] for n in nodes], rtol=1e-9, atol=1e-12)
