@@ -132,3 +132,24 @@ def test_acceptance_estimation_from_two_experiments(bench_runs):
         assert lo <= truth <= hi, (name, lo, truth, hi)
     assert out.nrmse["locked_rotor"]["i"] < out.nrmse_initial["locked_rotor"]["i"]
     assert len(out.history) >= 3
+
+
+def test_noise_free_data_of_a_stiff_network_ask_no_finer_substeps_than_they_can_show():
+    """A random network of 19 states (tests.compiler.test_random_networks, seed 2),
+    fitted to its own noise-free simulation: the residuals at the solution are the
+    discretization error itself, so the fit's standard errors over the noise level
+    (std_scale) shrink with every refinement and asked for ever finer substeps, up to
+    the limit (minutes at 400). No data show an error below noise_level's floor, 1e-4 of
+    their range: std_scale stays at least that floor over the noise level."""
+    from tests.compiler.test_random_networks import T_END, random_network
+    cm = mt.compile_model(random_network(2)())
+    true = float(cm.p0[cm.param_names.index("u0.Rb")])
+    t = np.linspace(0.0, T_END, 41)
+    res = mt.simulate(cm, T_END, rtol=1e-10, atol=1e-12, t_out=t)
+    outs = {"a": "u0.p0.i", "b": "u0.p1.i"}
+    run = Experiment("run", t=t, outputs={k: res[v] for k, v in outs.items()})
+    prob = EstimationProblem(cm, [run], [FreeParameter("u0.Rb", 1.6 * true, 0.01, 100.0)],
+                             outputs=outs, max_substeps=64)
+    out = estimate(prob)
+    assert out.parameters["u0.Rb"] == pytest.approx(true, rel=1e-6)
+    assert prob.bound[0]["substeps"] <= 4

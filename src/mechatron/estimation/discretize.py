@@ -273,15 +273,23 @@ def choose_substeps(h_max: float, tau_min: float, *, ratio: float = 1.0,
     return m
 
 
+def noise_floor(y) -> float:
+    """The least noise level `noise_level` gives ``y``: 1e-4 of its range (1e-12 for a
+    constant)."""
+    y = np.asarray(y, dtype=float)
+    span = float(np.ptp(y)) if y.size else 0.0
+    return 1e-4 * span if span > 0 else 1e-12
+
+
 def noise_level(y) -> float:
     """Noise level of a measured signal for the discretization error test: the robust
     (median absolute deviation) standard deviation of its second differences divided by
     sqrt(6), what white noise of that level gives; a smooth signal sampled finely adds
-    little to it. At least 1e-4 of the signal's range (a 14-bit sensor: noise-free or
-    quantized data would otherwise ask for an error no data can show)."""
+    little to it. At least `noise_floor`, 1e-4 of the signal's range (a 14-bit sensor:
+    noise-free or quantized data would otherwise ask for an error no data can show)."""
     y = np.asarray(y, dtype=float)
     span = float(np.ptp(y)) if y.size else 0.0
-    floor = 1e-4 * span if span > 0 else 1e-12
+    floor = noise_floor(y)
     if y.size < 5:
         return max(span, floor)
     d = np.diff(y, 2)

@@ -65,7 +65,8 @@ from mechatron.estimation.native import compiler
 from mechatron.estimation.uncertainty import (RHO_WARN, acf, bartlett_critical, diagnose,
                                               hac_covariance, profile_interval)
 from mechatron.estimation.discretize import (Trajectory, check_model, choose_substeps,
-                                             fastest_time_constant, grid_fits, noise_level)
+                                             fastest_time_constant, grid_fits, noise_floor,
+                                             noise_level)
 
 log = logging.getLogger(__name__)
 
@@ -352,10 +353,12 @@ class EstimationProblem:
                 problems.append(str(exc))
                 continue
             Ym = np.array([e.outputs[lab] * f for lab, f in zip(out_labels, fout)])
-            sig, noise = [], []
+            sig, noise, floor = [], [], []
             for lab, f, y in zip(out_labels, fout, Ym):
                 s = e.sigma.get(lab)
                 noise.append(s * f if s else noise_level(y))
+                # the least level such data can show; none where the noise is given
+                floor.append(0.0 if s else noise_floor(y))
                 s = s * f if s else float(np.ptp(y)) or 1.0
                 sig.append(s)
             pe = self.base.copy()
@@ -388,7 +391,8 @@ class EstimationProblem:
             paths = list(dict.fromkeys(p for lab in out_labels
                                        for p in self._outspec[lab].paths))
             rows = [[paths.index(p) for p in self._outspec[lab].paths] for lab in out_labels]
-            b = dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), noise=np.array(noise), p=pe,
+            b = dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), noise=np.array(noise),
+                     floor=np.array(floor) / np.array(noise), p=pe,
                      x0=x0, out_labels=out_labels, out_rows=rows, in_labels=in_labels,
                      in_index=[pindex[self.inputs[lab]] for lab in in_labels],
                      out_index=[cm.names.index(p) for p in paths], auto=auto)
@@ -631,6 +635,16 @@ class EstimationProblem:
         tau = fastest_time_constant(cm, p, X)
         return choose_substeps(float(np.diff(e.t).max()), tau, ratio=ratio,
                                max_substeps=max_substeps, where=e.where("t"))
+
+    def least_std_scale(self) -> float:
+        """The least `std_scale` that means anything: an output whose noise level is
+        `noise_level`'s floor (1e-4 of its range: noise-free or quantized data) cannot
+        show a discretization error below that level, however small the fit's residuals
+        (on noise-free data they are the discretization error itself). The smallest ratio
+        of that floor to the output's noise level, over the outputs whose noise was not
+        given (0 when every one was)."""
+        ratios = [r for b in self.bound for r in b["floor"] if r > 0]
+        return min(ratios, default=0.0)
 
     def refine(self, theta, ratio: float = 1.0, max_substeps: int = 400,
                std_scale: float = 1.0) -> bool:
@@ -1146,9 +1160,8 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
                 break
         # the substeps were chosen at the starting values, coarse (L-stable steps); make
         # them fine enough at the solution, and polish the solution with them
-        if not refine or not prob.refine(to_theta(x), fine_ratio,
-                                         std_scale=std_scale(prob, r, J, covariance,
-                                                             bandwidth)):
+        scale = max(std_scale(prob, r, J, covariance, bandwidth), prob.least_std_scale())
+        if not refine or not prob.refine(to_theta(x), fine_ratio, std_scale=scale):
             break
         r, J = point(x)
         cost = float(r @ r)
