@@ -3,6 +3,8 @@ used twice and four times, three levels deep, parameters passed on, open ports, 
 ports, signal subsystems, and check_balance agreeing with the compiler. Physics against
 the exact solution of the linear network."""
 
+import re
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -208,46 +210,34 @@ def test_parameters_are_passed_on_through_expressions_and_tuned_without_recompil
 
 
 def test_setting_a_parameter_its_parent_passes_on_names_the_one_to_set(tmp_path):
-    """``Stage.r`` takes ``R=R``: ``s1.r.R`` has no value of its own, and setting it says
-    to set ``s1.R``; a part's parameter bound to an expression says where it is written.
-    Kept through saving the compiled model, and said by estimation too."""
+    """In `nested_model`, ``Pair`` passes ``R`` on to its stages and each stage to its
+    resistor: ``pair.first.R`` and ``pair.first.r.R`` have no value of their own, and
+    setting either says to set ``pair.R`` (the chain followed to its source); a part's
+    parameter bound to an expression (``h.a.R = R / 2``) says where it is written. Kept
+    through saving the compiled model, and said by estimation too."""
     from mechatron.errors import ParameterError
+    from tests.compiler.test_flatten_symbols import nested_model
 
-    class Halves(mt.Component):
-        R = mt.Parameter("Ohm", default=2.0, min=0, doc="Total")
-        p = el.Pin(doc="Input")
-        n = el.Pin(doc="Output")
-        a = el.Resistor(R=R / 2)
-        b = el.Resistor(R=R / 2)
-
-        def equations(self):
-            return [mt.connect(self.p, self.a.p), mt.connect(self.a.n, self.b.p),
-                    mt.connect(self.b.n, self.n)]
-
-    m = mt.System("bound")
-    src, g = m.add("src", el.DCVoltageSource(V=1.0)), m.add("g", el.ElectricalReference())
-    s1, h = m.add("s1", Stage(R=1.0, C=1.0)), m.add("h", Halves())
-    m.connect(src.p, s1.p)
-    m.connect(s1.n, h.p)
-    m.connect(h.n, s1.gnd, src.n, g.port)
-    cm = mt.compile_model(m)
-    with pytest.raises(ParameterError, match=r"'s1\.r\.R' is bound to R of 's1' .* set "
-                                             r"'s1\.R' instead\."):
-        mt.simulate(cm, 0.1, params={"s1.r.R": 2.0})
+    cm = mt.compile_model(nested_model())
+    for name in ("pair.first.R", "pair.first.r.R"):
+        message = rf"'{re.escape(name)}' is bound to R of 'pair(\.first)?' .* set 'pair\.R'"
+        with pytest.raises(ParameterError, match=message + r" instead\."):
+            mt.simulate(cm, 0.1, params={name: 2.0})
     with pytest.raises(ParameterError, match=r"'h\.a\.R' is bound to \(R / 2\) of 'h' .* "
                                              r"set the parameters it is written in\."):
         mt.simulate(cm, 0.1, params={"h.a.R": 2.0})
     loaded = mt.CompiledModel.load(cm.save(tmp_path / "bound.pkl"))
-    assert loaded.binding_of("s1.r.R") == cm.binding_of("s1.r.R") != ""
-    assert cm.binding_of("s1.R") == "" and cm.binding_of("nothing.R") == ""
+    assert loaded.binding_of("pair.first.r.R") == cm.binding_of("pair.first.r.R") != ""
+    assert cm.binding_of("pair.R") == "" and cm.binding_of("nothing.R") == ""
     # an unknown name that is bound to nothing keeps the close matches
-    with pytest.raises(ParameterError, match=r"unknown parameter\(s\) 's1\.Rr' \(did you "
-                                             r"mean s1\.R"):
-        mt.simulate(cm, 0.1, params={"s1.Rr": 2.0})
+    with pytest.raises(ParameterError, match=r"unknown parameter\(s\) 'pair\.Rr' \(did "
+                                             r"you mean pair\.R"):
+        mt.simulate(cm, 0.1, params={"pair.Rr": 2.0})
     from mechatron.estimation import EstimationProblem, Experiment
     run = Experiment("run", t=[0.0, 0.5, 1.0], outputs={"v": [0.0, 0.3, 0.5]})
-    with pytest.raises(ParameterError, match=r"free parameter 's1\.r\.R' .* set 's1\.R'"):
-        EstimationProblem(cm, [run], ["s1.r.R"], outputs={"v": "s1.c.v"})
+    with pytest.raises(ParameterError, match=r"free parameter 'pair\.first\.R' .* set "
+                                             r"'pair\.R'"):
+        EstimationProblem(cm, [run], ["pair.first.R"], outputs={"v": "c.v"})
 
 
 def test_a_passed_on_parameter_of_the_wrong_dimension_is_named():

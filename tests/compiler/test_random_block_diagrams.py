@@ -17,10 +17,10 @@ import random
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
 
 import mechatron as mt
 from mechatron.library import blocks
+from tests.compiler.random_models import exact
 
 SEEDS = range(12)
 T_END = 2.0
@@ -150,24 +150,17 @@ def solved_by_hand(spec: list, source: tuple, t: np.ndarray) -> dict[str, np.nda
     for edge in edges + [np.inf]:
         while todo and todo[0][1] < edge:
             k, tk = todo.pop(0)
-            values[k] = np.concatenate([_exact(D, (r, z), x, tk - now), [r, z]])
+            values[k] = np.concatenate([exact(D[:, :ns], D[:, ns:] @ (r, z), x, tk - now),
+                                        [r, z]])
         if edge == np.inf:
             break
-        x, now = _exact(D, (r, z), x, edge - now), edge
+        x, now = exact(D[:, :ns], D[:, ns:] @ (r, z), x, edge - now), edge
         if edge == t_step:
             r = source[1]
         if hold and any(abs(edge - tick) < 1e-12 for tick in ticks):
             z = float((np.concatenate([x, [r, z]]) @ Y[sampled]))
     values = values @ Y.T
     return {f"{q[0]}.y": values[:, col[q[0]]] for q in spec}
-
-
-def _exact(D: np.ndarray, inputs: tuple, x0: np.ndarray, dt: float) -> np.ndarray:
-    """``x(dt)`` of ``x' = D [x, inputs]`` from ``x0``, the inputs held."""
-    m = D.shape[0]
-    M = np.zeros((m + 1, m + 1))
-    M[:m, :m], M[:m, m] = D[:, :m] * dt, D[:, m:] @ np.asarray(inputs) * dt
-    return (expm(M) @ np.append(x0, 1.0))[:m]
 
 
 @pytest.mark.parametrize("seed", SEEDS)

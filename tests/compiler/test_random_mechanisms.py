@@ -21,12 +21,12 @@ import random
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
 
 import mechatron as mt
 from mechatron.library import blocks
 from mechatron.library import rotational as rot
 from mechatron.library import translational as tr
+from tests.compiler.random_models import assembled, assert_same_run, exact, wired_equations
 from tests.compiler.test_folding import assert_same, unfolded
 
 SEEDS = range(10)
@@ -111,19 +111,7 @@ def random_class(rng, name: str, domain: dict) -> type:
     for f in flanges:
         if rng.random() < 0.5:
             part("M", (f,))
-    order = list(wires.values())
-    rng.shuffle(order)
-    plan = [members[::-1] if rng.random() < 0.5 else members for members in order]
-
-    def equations(self):
-        def port(path):
-            obj = self
-            for step in path:
-                obj = getattr(obj, step)
-            return obj
-        return [mt.connect(*map(port, members)) for members in plan if len(members) > 1]
-
-    ns["equations"] = equations
+    ns["equations"] = wired_equations(rng, wires)
     cls = type(name, (mt.Component,), ns)
     cls.flange_names, cls.wires, cls.specs = tuple(flanges), wires, specs
     return cls
@@ -171,35 +159,8 @@ def random_mechanism(seed: int, order: int = 0, domain: str = "translational"):
         attached = [(rng.choice(nodes + ["g"]), f) for f in cls.flange_names]
         parts.append((f"u{k}", lambda cls=cls, given=given: cls(**given), attached))
         instances.append((f"u{k}", cls, given.get("kb"), {f: n for n, f in attached}))
-    shuffle = random.Random(1000 * seed + order)
-    if order:
-        shuffle.shuffle(parts)
-
-    def build() -> mt.System:
-        m = mt.System(f"mech{seed}")
-        wires: dict[str, list] = {}
-        for name, make, attached in parts:
-            part = m.add(name, make())
-            for node, pin in attached:
-                wires.setdefault(node, []).append(getattr(part, pin))
-        connects = []
-        for members in wires.values():
-            members = list(members)
-            if order:
-                shuffle.shuffle(members)
-            connects.append(tuple(members))
-        connects.append((m.cmd.y, getattr(m.push, kit["command"])))
-        if order:
-            shuffle.shuffle(connects)
-        for members in connects:
-            m.connect(*members)
-        return m
-
-    state = shuffle.getstate()
-
-    def fresh() -> mt.System:
-        shuffle.setstate(state)
-        return build()
+    fresh = assembled(f"mech{seed}", parts, [(("cmd", "y"), ("push", kit["command"]))],
+                      seed, order)
 
     def all_parts() -> list[tuple]:
         out = list(top)
@@ -310,9 +271,9 @@ def solved_by_hand(parts: list, force: tuple, t: np.ndarray,
     states = np.zeros((t.size, n_s))
     t_step = T_END / 4
     for k, tk in enumerate(t):
-        x = _exact(deriv, force[0], np.zeros(n_s), min(tk, t_step))
+        x = exact(deriv[:, :-1], deriv[:, -1] * force[0], np.zeros(n_s), min(tk, t_step))
         if tk > t_step:
-            x = _exact(deriv, force[1], x, tk - t_step)
+            x = exact(deriv[:, :-1], deriv[:, -1] * force[1], x, tk - t_step)
         states[k] = x
     f = np.where(t >= t_step, force[1], force[0])
     zf = np.hstack([states, f[:, None]])    # [z_h, x, f] at each time
@@ -333,14 +294,6 @@ def solved_by_hand(parts: list, force: tuple, t: np.ndarray,
         out[f"{path}.{fl}"] = k * zf[:, nh + j]
         out[f"{path}.A.{w}"] = speed[a]
     return out
-
-
-def _exact(D: np.ndarray, f: float, s0: np.ndarray, dt: float) -> np.ndarray:
-    """``s(dt)`` of ``s' = D[:, :-1] s + D[:, -1] f`` from ``s0``."""
-    m = D.shape[0]
-    A = np.zeros((m + 1, m + 1))
-    A[:m, :m], A[:m, m] = D[:, :-1] * dt, D[:, -1] * f * dt
-    return (expm(A) @ np.append(s0, 1.0))[:m]
 
 
 CASES = [(s, "translational") for s in SEEDS] + [(s, "rotational") for s in SEEDS]
@@ -365,10 +318,4 @@ def test_random_mechanisms_folded_match_written_out_and_any_order(seed, domain,
     folded = mt.compile_model(build())
     assert_same(folded, unfolded(monkeypatch, build), T_END, tol=1e-8)
     other = mt.compile_model(random_mechanism(seed, order=1, domain=domain)())
-    assert sorted(other.names) == sorted(folded.names)
-    a = mt.simulate(folded, T_END, rtol=1e-10, atol=1e-12, log="all")
-    b = mt.simulate(other, T_END, rtol=1e-10, atol=1e-12, t_out=a.t, log="all")
-    for name in folded.names:
-        scale = max(1.0, float(np.max(np.abs(a[name]))))
-        np.testing.assert_allclose(b[name], a[name], rtol=0, atol=1e-8 * scale,
-                                   err_msg=name)
+    assert_same_run(folded, other, T_END)

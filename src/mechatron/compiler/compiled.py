@@ -132,6 +132,10 @@ class CompiledModel:
         if got is None:
             return ""
         text, target = got
+        seen = {name}
+        while target in bound and target not in seen:   # passed on again: its source
+            seen.add(target)
+            target = bound[target][1]
         return (f"'{name}' is bound to {text} (a part's parameter its parent passes on) and "
                 "has no value of its own: " + (f"set '{target}' instead." if target else
                                                "set the parameters it is written in."))
