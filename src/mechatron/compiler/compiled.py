@@ -140,6 +140,11 @@ class CompiledModel:
                 "has no value of its own: " + (f"set '{target}' instead." if target else
                                                "set the parameters it is written in."))
 
+    def not_a_parameter(self, name: str) -> str:
+        """Why ``name`` is not a parameter of the model, for messages: what it is bound
+        to (`binding_of`), else the model's parameters."""
+        return self.binding_of(name) or f"its parameters are {', '.join(self.param_names)}."
+
     def parameter_vector(self, params: dict | None = None) -> np.ndarray:
         """Default parameter values with ``params`` (path -> value or quantity) applied."""
         p = self.p0.copy()

@@ -563,9 +563,8 @@ def build_estimation(cfg: dict, *, model=None):
     free = []
     for name, spec in cfg.get("parameters", {}).items():
         if name not in units:
-            why = cm.binding_of(name) or f"its parameters are {', '.join(cm.param_names)}."
             raise ParameterError(f"{cfg['_path']}: [parameters] '{name}' is not a parameter "
-                                 f"of the model: {why}", path=name)
+                                 f"of the model: {cm.not_a_parameter(name)}", path=name)
         spec = spec if isinstance(spec, dict) else {"initial": spec}
         bad = sorted(set(spec) - {"initial", "min", "max", "scale"})
         if bad:

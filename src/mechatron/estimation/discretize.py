@@ -288,10 +288,9 @@ def noise_level(y) -> float:
     little to it. At least `noise_floor`, 1e-4 of the signal's range (a 14-bit sensor:
     noise-free or quantized data would otherwise ask for an error no data can show)."""
     y = np.asarray(y, dtype=float)
-    span = float(np.ptp(y)) if y.size else 0.0
     floor = noise_floor(y)
     if y.size < 5:
-        return max(span, floor)
+        return max(float(np.ptp(y)) if y.size else 0.0, floor)
     d = np.diff(y, 2)
     mad = float(np.median(np.abs(d - np.median(d))))
     return max(1.4826 * mad / math.sqrt(6.0), floor)

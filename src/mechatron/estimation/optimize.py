@@ -159,10 +159,8 @@ class ResponseProblem:
         problems = []
         for d in self.design:
             if d.name not in pindex:
-                why = cm.binding_of(d.name) or \
-                    f"its parameters are {', '.join(cm.param_names)}."
                 problems.append(f"design variable '{d.name}' is not a parameter of "
-                                f"'{cm.name}': {why}")
+                                f"'{cm.name}': {cm.not_a_parameter(d.name)}")
                 continue
             if d.initial is None:
                 d.initial = float(self.base[pindex[d.name]])

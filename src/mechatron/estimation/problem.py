@@ -234,10 +234,8 @@ class EstimationProblem:
         problems = []
         for f in self.free:
             if f.name not in pindex:
-                why = cm.binding_of(f.name) or \
-                    f"its parameters are {', '.join(cm.param_names)}."
                 problems.append(f"free parameter '{f.name}' is not a parameter of model "
-                                f"'{cm.name}': {why}")
+                                f"'{cm.name}': {cm.not_a_parameter(f.name)}")
         for lab, path in self.inputs.items():
             if path not in pindex:
                 problems.append(f"input '{lab}' drives '{path}', which is not a parameter "
@@ -392,7 +390,7 @@ class EstimationProblem:
                                        for p in self._outspec[lab].paths))
             rows = [[paths.index(p) for p in self._outspec[lab].paths] for lab in out_labels]
             b = dict(exp=e, U=U, Ym=Ym, sigma=np.array(sig), noise=np.array(noise),
-                     floor=np.array(floor) / np.array(noise), p=pe,
+                     floor_ratio=np.array(floor) / np.array(noise), p=pe,
                      x0=x0, out_labels=out_labels, out_rows=rows, in_labels=in_labels,
                      in_index=[pindex[self.inputs[lab]] for lab in in_labels],
                      out_index=[cm.names.index(p) for p in paths], auto=auto)
@@ -643,7 +641,7 @@ class EstimationProblem:
         (on noise-free data they are the discretization error itself). The smallest ratio
         of that floor to the output's noise level, over the outputs whose noise was not
         given (0 when every one was)."""
-        ratios = [r for b in self.bound for r in b["floor"] if r > 0]
+        ratios = [r for b in self.bound for r in b["floor_ratio"] if r > 0]
         return min(ratios, default=0.0)
 
     def refine(self, theta, ratio: float = 1.0, max_substeps: int = 400,
@@ -1160,8 +1158,9 @@ def estimate(problem: EstimationProblem, *, max_iterations: int = 100, xtol: flo
                 break
         # the substeps were chosen at the starting values, coarse (L-stable steps); make
         # them fine enough at the solution, and polish the solution with them
-        scale = max(std_scale(prob, r, J, covariance, bandwidth), prob.least_std_scale())
-        if not refine or not prob.refine(to_theta(x), fine_ratio, std_scale=scale):
+        if not refine or not prob.refine(to_theta(x), fine_ratio,
+                                         std_scale=std_scale(prob, r, J, covariance,
+                                                             bandwidth)):
             break
         r, J = point(x)
         cost = float(r @ r)
@@ -1274,13 +1273,16 @@ def std_scale(prob: EstimationProblem, r, J, covariance: str = "hac",
     is measured in: ``s`` (the residuals' level, 1 when ``sigma`` is right) times the
     smallest ratio of the HAC to the white-noise standard errors (at least 1). A
     discretization error ``E`` moves no estimate by more than ``E / std_scale`` of its
-    reported standard error."""
+    reported standard error. At least `EstimationProblem.least_std_scale`: on noise-free
+    data the residuals are the discretization error itself, and would shrink it with
+    every refinement."""
     r = np.asarray(r, dtype=float)
     J = np.asarray(J, dtype=float)
     n, q = J.shape
     s = math.sqrt(float(r @ r) / max(n - q, 1))
+    least = max(prob.least_std_scale(), 1e-300)
     if covariance != "hac" or q == 0:
-        return max(s, 1e-300)
+        return max(s, least)
     try:
         white = s * s * np.linalg.pinv(J.T @ J)
         cov, _b = hac_covariance(J, r, prob.residual_groups(), bandwidth=bandwidth)
@@ -1288,7 +1290,7 @@ def std_scale(prob: EstimationProblem, r, J, covariance: str = "hac",
             ratio = float(np.nanmin(np.sqrt(np.diag(cov) / np.diag(white))))
     except (np.linalg.LinAlgError, ValueError):
         ratio = 1.0
-    return max(s, 1e-300) * max(1.0, ratio if math.isfinite(ratio) else 1.0)
+    return max(s * max(1.0, ratio if math.isfinite(ratio) else 1.0), least)
 
 
 def residual_rho1(prob: EstimationProblem, r: np.ndarray) -> dict:

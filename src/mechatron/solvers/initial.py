@@ -137,7 +137,8 @@ def _solve(cm: CompiledModel, p, t0, x0, z0, modes):
         hard.append(cm.f_init(t0, X, zs, ca.DM(p)))
         hard_names += [f"initial equation '{text}'" for text in
                        cm.report.get("initial_equations", [])]
-    for k, name in enumerate(cm.state_names if not held else ()):
+    states = () if held else cm.state_names     # held: constants, no term of theirs
+    for k, name in enumerate(states):
         prio = cm.x_priority[k]
         if prio == "high":
             hard.append(xs[k] - x0[k])
