@@ -231,6 +231,11 @@ def _rows_ladder_simulate(r: dict) -> list[dict]:
                          row["ratio_lsoda_over_mechatron"],
                          f"ratio >= {r['goals']['ratio_lsoda_over_mechatron']:g} (issue 17)",
                          row["goal_ratio_met"]))
+        flushed = row.get("scipy_LSODA_banded_flushed", {})
+        if "median_s" in flushed:
+            rows.append(_row(f"RC ladder N={n} simulate (default, warm)", "s", m["median_s"],
+                             "SciPy LSODA, banded, subnormals flushed", flushed["median_s"],
+                             row["ratio_lsoda_flushed_over_mechatron"]))
         rows.append(_row(f"RC ladder N={n} simulate, first call", "s", m["first_s"]))
         if "load_and_first_s" in m:
             rows.append(_row(f"RC ladder N={n} saved model: load and first call", "s",

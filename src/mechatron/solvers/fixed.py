@@ -21,6 +21,7 @@ import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
+from mechatron.solvers.fpenv import subnormals_flushed
 
 CHUNK = 2000   # steps per native fixed-step loop
 #: Newton's iteration has converged when the correction one more iteration would make is
@@ -250,6 +251,7 @@ def make_step(cm: CompiledModel, method: str, dt: float, iterations: int = 3, *,
     return step
 
 
+@subnormals_flushed()
 def integrate_fixed(cm: CompiledModel, t0: float, t_stop: float, dt: float, X0, z0, p, *,
                     method: str, iterations: int = 3, inputs=None, newton: str = "check"):
     """Run ``make_step`` from ``t0`` to ``t_stop``; return ``(t, Y, X_final, unconverged)``.

@@ -18,6 +18,7 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
+from mechatron.solvers.fpenv import subnormals_flushed
 
 __all__ = ["evaluate_outputs", "evaluate_point", "OutputColumns", "SMALL_LOG"]
 
@@ -84,6 +85,7 @@ def evaluate_point(f: ca.Function, args) -> np.ndarray:
     return out
 
 
+@subnormals_flushed()
 def evaluate_outputs(cm: CompiledModel, t: np.ndarray, X: np.ndarray, Z: np.ndarray,
                      p: np.ndarray) -> np.ndarray:
     """Every logged variable at every point: array (n_logged, n_points).
@@ -149,6 +151,7 @@ class OutputColumns:
         state["_cache"], state["_shared"] = {}, {}
         return state
 
+    @subnormals_flushed()
     def __call__(self, rows) -> np.ndarray:
         rows = np.asarray(rows, dtype=np.int64).ravel()
         n_all = self.n_out

@@ -40,6 +40,7 @@ import numpy as np
 
 from mechatron.compiler.compiled import CHATTER_FLAG, CompiledModel
 from mechatron.errors import SimulationError
+from mechatron.solvers.fpenv import subnormals_flushed
 
 __all__ = ["integrate_native", "native_library", "auto_library", "build_library",
            "BuildError", "compiler", "cache_dir", "MAX_STATES", "AUTO_STATES", "AUTO_SOURCE"]
@@ -256,6 +257,7 @@ def _slug(name: str) -> str:
     return "".join(ch if ch.isalnum() else "_" for ch in name)[:40] or "model"
 
 
+@subnormals_flushed()
 def integrate_native(cm: CompiledModel, grid: np.ndarray, x0: np.ndarray, p: np.ndarray, *,
                      rtol: float, atol: float, max_step: float | None = None,
                      fixed_step: float | None = None):

@@ -20,6 +20,7 @@ import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
+from mechatron.solvers.fpenv import subnormals_flushed
 from mechatron.solvers.inputs import driven_parameters
 from mechatron.solvers.logging import evaluate_point
 
@@ -343,6 +344,7 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
     return integ
 
 
+@subnormals_flushed()
 def integrate_variable(cm: CompiledModel, grid: np.ndarray, X0: np.ndarray, z0: np.ndarray,
                        p: np.ndarray, *, solver: str, rtol: float, atol: float,
                        max_step: float | None = None, inputs=None,
