@@ -244,3 +244,27 @@ def test_relative_difference_scales_each_variable_by_its_kind():
     c = mt.SimResult(t, np.array([[2.0, 3.0, 4.0], [1e-15, -2e-15, 0.0],
                                   [1.0, 1.001, 1.0]]), names, units)
     assert max_relative_difference(c, b) == pytest.approx(1e-3)
+
+
+def test_c_flushes_subnormals_as_the_desktop_does_and_matches_it_bit_for_bit(tmp_path):
+    """An RC ladder of 120 sections stepped by RK4 at dt = RC / 1000: each stage carries
+    the step at the source one section further, a thousand times smaller, so the far
+    capacitors pass through subnormal values (below 1e-308; about 300 of them when
+    unflushed), which the desktop's solvers flush to zero
+    (mechatron.solvers.fpenv); the harness sets the same mode (mt_fpmode.h), so both give
+    the same numbers and neither holds a subnormal."""
+    from mechatron.solvers.fpenv import flushing_available
+    from tests.solvers.test_fpenv import rc_ladder
+    if not flushing_available():
+        pytest.skip("no known floating-point environment layout: the desktop runs unflushed")
+    cm = mt.compile_model(rc_ladder(120, C=1e-3))
+    code = generate_c(cm, tmp_path, solver="rk4", dt=1e-6, t_stop=3e-5)
+    build(code)
+    c_res = run_harness(code)
+    desk = mt.simulate(cm, 3e-5, solver="rk4", dt=1e-6)
+    tiny = np.finfo(float).tiny
+    values = np.array([desk[n] for n in desk.names])
+    assert np.sum((values != 0) & (np.abs(values) < 1e-290)) > 100   # flushed neighbours
+    for n in desk.names:
+        np.testing.assert_array_equal(c_res[n], desk[n], err_msg=n)
+        assert not np.any((c_res[n] != 0) & (np.abs(c_res[n]) < tiny)), n

@@ -58,7 +58,8 @@ class ExpDiode(el.OnePort):
         return [self.i == self.Is * (ca.exp(self.v / self.Vt) - 1)]
 
 
-def test_nonlinear_loop_is_left_to_the_dae_solver_and_solved():
+def clamp_network() -> mt.System:
+    """5 V through 1 kOhm into a diode in parallel with 10 kOhm."""
     m = mt.System("clamp")
     src = m.add("src", el.DCVoltageSource(V=5.0))
     r = m.add("r", el.Resistor(R=1000.0))
@@ -68,13 +69,20 @@ def test_nonlinear_loop_is_left_to_the_dae_solver_and_solved():
     m.connect(src.p, r.p)
     m.connect(r.n, d.p, rl.p)
     m.connect(d.n, rl.n, src.n, g.port)
-    cm = mt.compile_model(m)
-    assert cm.nz >= 1
-    res = mt.simulate(cm, 1e-3, rtol=1e-10, atol=1e-14)
+    return m
 
+
+def clamp_voltage() -> float:
+    """The diode's voltage in `clamp_network`, from its node's current balance."""
     def kcl(v):
         return (5.0 - v) / 1000.0 - 1e-12 * (np.exp(v / 0.025) - 1) - v / 10e3
 
-    v = brentq(kcl, 0.0, 1.0, xtol=1e-15)
-    assert res.final("d.v") == pytest.approx(v, rel=1e-9)
+    return brentq(kcl, 0.0, 1.0, xtol=1e-15)
+
+
+def test_nonlinear_loop_is_left_to_the_dae_solver_and_solved():
+    cm = mt.compile_model(clamp_network())
+    assert cm.nz >= 1
+    res = mt.simulate(cm, 1e-3, rtol=1e-10, atol=1e-14)
+    assert res.final("d.v") == pytest.approx(clamp_voltage(), rel=1e-9)
     assert res.final("r.i") == pytest.approx(res.final("d.i") + res.final("rl.i"), rel=1e-9)

@@ -9,7 +9,7 @@ import mechatron as mt
 from mechatron.errors import SimulationError
 from mechatron.library import electrical as el
 from mechatron.solvers import fpenv
-from mechatron.solvers.fpenv import flushing_available, subnormals_flushed
+from mechatron.solvers.fpenv import flushing_available, subnormals_flushed, subnormals_kept
 
 SUBNORMAL = 1e-310          # below np.finfo(float).tiny = 2.2e-308
 TINY = np.finfo(float).tiny
@@ -109,3 +109,25 @@ def test_a_run_that_raises_in_the_integrator_restores_the_environment(solver):
     with pytest.raises(SimulationError):
         mt.simulate(Blowup(), 2.0, solver=solver, dt=0.01)
     assert not flushes()
+
+
+@needs_flush
+def test_a_kept_block_inside_a_flushed_one_keeps_subnormals():
+    with subnormals_flushed():
+        with subnormals_kept():
+            assert not flushes()
+        assert flushes()
+    assert not flushes()
+
+
+@needs_flush
+def test_initialization_keeps_subnormals_when_the_caller_flushes_them():
+    """A caller already flushing (a library built with fast-math sets the mode for the
+    whole process): the diode clamp's initialization, whose IPOPT restoration fails with
+    subnormals flushed, runs with them kept; the run itself flushes as always."""
+    from tests.compiler.test_algebraic_loops import clamp_network, clamp_voltage
+    cm = mt.compile_model(clamp_network())
+    with subnormals_flushed():
+        res = mt.simulate(cm, 1e-3, rtol=1e-10, atol=1e-14)
+        assert flushes()
+    assert res.final("d.v") == pytest.approx(clamp_voltage(), rel=1e-9)

@@ -28,6 +28,8 @@ from pathlib import Path
 
 import casadi as ca
 
+from mechatron._io import write_text
+from mechatron.codegen._common import render
 from mechatron.codegen.c import generate_c
 from mechatron.errors import SimulationError
 from mechatron.realtime.controller import CONTROLLER_SOLVER
@@ -85,6 +87,7 @@ def generate_sources(loop: LoopFunctions, out: Path) -> Path:
     for src in C_DIR.iterdir():
         if src.suffix in (".c", ".h"):
             shutil.copy(src, out / src.name)
+    write_text(out / "mt_fpmode.h", render("c/mt_fpmode.h"))     # shared with codegen
     return out
 
 

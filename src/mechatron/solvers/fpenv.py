@@ -29,7 +29,7 @@ import functools
 import platform
 import sys
 
-__all__ = ["subnormals_flushed", "flushing_available"]
+__all__ = ["subnormals_flushed", "subnormals_kept", "flushing_available"]
 
 #: Per machine: the size of ``fenv_t`` in 32-bit words, the index of the control word
 #: among them, and the bits that flush subnormal results and operands to zero.
@@ -62,10 +62,14 @@ class _Environment:
     def flushing(self, env: ctypes.Array) -> bool:
         return env[self._index] & self._bits == self._bits
 
-    def flushed(self, env: ctypes.Array) -> ctypes.Array:
-        """A copy of ``env`` with the flush bits set."""
+    def keeping(self, env: ctypes.Array) -> bool:
+        return env[self._index] & self._bits == 0
+
+    def flushed(self, env: ctypes.Array, flush: bool = True) -> ctypes.Array:
+        """A copy of ``env`` with the flush bits set (``flush``) or cleared."""
         out = self._type.from_buffer_copy(env)
-        out[self._index] |= self._bits
+        out[self._index] = (out[self._index] | self._bits if flush
+                            else out[self._index] & ~self._bits)
         return out
 
 
@@ -95,22 +99,24 @@ def flushing_available() -> bool:
     return _environment() is not None
 
 
-class subnormals_flushed(contextlib.ContextDecorator):
-    """Within the block (or the decorated function), subnormal operands and results of
-    this thread's floating-point arithmetic are taken as zero; the environment before it is
-    restored after it. Nested blocks, and callers already flushing, are left as they are.
-    """
+class _SubnormalMode(contextlib.ContextDecorator):
+    """Within the block (or the decorated function), this thread's floating-point
+    arithmetic flushes subnormal operands and results to zero (``FLUSH``) or keeps them
+    (IEEE 754's gradual underflow); the environment before it is restored after it. A
+    caller already in that mode is left as it is, so blocks nest."""
+
+    FLUSH = True
 
     def _recreate_cm(self):
-        return subnormals_flushed()     # one per call: calls may nest or run in threads
+        return type(self)()     # one per call: calls may nest or run in threads
 
     def __enter__(self):
         env = _environment()
         self._saved = None
         if env is not None:
             saved = env.read()
-            if not env.flushing(saved):
-                env.write(env.flushed(saved))
+            if not (env.flushing(saved) if self.FLUSH else env.keeping(saved)):
+                env.write(env.flushed(saved, self.FLUSH))
                 self._saved = saved
         return self
 
@@ -119,3 +125,15 @@ class subnormals_flushed(contextlib.ContextDecorator):
             _environment().write(self._saved)
             self._saved = None
         return False
+
+
+class subnormals_flushed(_SubnormalMode):
+    """Subnormal numbers taken as zero within the block: the solvers' integration."""
+
+
+class subnormals_kept(_SubnormalMode):
+    """Subnormal numbers kept within the block, whatever the caller's mode: consistent
+    initialization, whose interior-point solver (IPOPT) has been seen to fail its
+    restoration phase on a diode's exponential when they are flushed."""
+
+    FLUSH = False

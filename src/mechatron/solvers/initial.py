@@ -17,6 +17,7 @@ import numpy as np
 
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import InitializationError
+from mechatron.solvers.fpenv import subnormals_kept
 
 __all__ = ["initialize", "initial_modes"]
 
@@ -66,6 +67,7 @@ def initial_modes(cm: CompiledModel, t0: float, x: np.ndarray, z: np.ndarray,
         path=cm.name)
 
 
+@subnormals_kept()
 def initialize(cm: CompiledModel, p: np.ndarray, t0: float = 0.0):
     """Return ``(X0, z0, report)``: the initial integration state, algebraic values, and
     one entry per start-value target (variable, target, priority, value, met)."""

@@ -350,6 +350,7 @@ def _write_files(prep: Prepared, folder: Path, out: Path) -> dict[str, Path]:
              f"{n}.c": render("c/model.c.in", **values),
              f"{n}_casadi.c": casadi_source(prep),
              f"{n}_main.c": render("c/main.c.in", **values),
+             "mt_fpmode.h": render("c/mt_fpmode.h"),
              f"{n}_arm.c": render("c/arm_main.c.in", **values),
              "Makefile": render("c/Makefile.in", **values)}
     for fname, text in texts.items():

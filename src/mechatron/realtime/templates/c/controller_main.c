@@ -15,6 +15,7 @@
 #include <sys/prctl.h>
 
 #include "ctrl_core.h"
+#include "mt_fpmode.h"
 #include "mt_transport.h"
 
 static volatile sig_atomic_t g_stop = 0;
@@ -36,6 +37,7 @@ int main(int argc, char **argv)
     mt_packet in, out;
     struct sigaction sa;
 
+    mt_flush_subnormals();      /* as the desktop solvers run (mt_fpmode.h) */
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = (i + 1 < argc) ? argv[i + 1] : NULL;

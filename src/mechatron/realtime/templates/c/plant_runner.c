@@ -30,6 +30,7 @@
 #include <sys/mman.h>
 #include <time.h>
 
+#include "mt_fpmode.h"
 #include "mt_plant_io.h"
 #include "mt_transport.h"
 
@@ -109,6 +110,7 @@ int main(int argc, char **argv)
     int nx, i;
     double t_wall0, t_wall;
 
+    mt_flush_subnormals();      /* as the desktop solvers run (mt_fpmode.h) */
     if (parse(argc, argv, &o) != 0) return 2;
     nx = mt_plant_size("mt_plant");
     if (nx < 0) return 2;

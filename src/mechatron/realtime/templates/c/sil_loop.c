@@ -42,6 +42,7 @@
 #include <unistd.h>
 
 #include "ctrl_core.h"
+#include "mt_fpmode.h"
 #include "mt_plant_io.h"
 #include "mt_transport.h"
 
@@ -138,6 +139,7 @@ int main(int argc, char **argv)
     pid_t spinner = -1;
     double t_wall0, t_wall, period;
 
+    mt_flush_subnormals();      /* as the desktop solvers run (mt_fpmode.h) */
     if (parse(argc, argv, &o) != 0) return 2;
     nx = mt_plant_size("mt_sil");
     if (nx < 0) return 2;
