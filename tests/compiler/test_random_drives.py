@@ -1,0 +1,175 @@
+"""Random electromechanical drives, across three domains, against the conservation of
+energy: a voltage source feeds a resistor (and an inductor) into a rotational EMF, which
+turns a chain of shafts joined by ideal gears, springs with dampers, or instances of a
+gear stage subsystem (a gear, an inertia, a spring and a damper, its ratio and inertia
+passed on as parameters), reused along the chain; the last shaft often drives a mass
+through a rack and pinion or a lead screw. Converters, gears and stages are drawn in
+either orientation, and the parts added and connected in any order.
+
+Every gear joins two inertias rigidly, so index reduction chooses which speed is a state,
+and without an inductor the current is algebraic. Whatever the compiler chose, the energy
+the source delivers, integrated over the run, must equal the energy stored (in the
+inductor, inertias, mass and springs, from their parameters and logged variables) plus
+the energy dissipated (resistor, dampers, converter losses): a sign wrong in a converter,
+a gear or a connection set creates or destroys energy."""
+
+from __future__ import annotations
+
+import random
+
+import numpy as np
+import pytest
+from scipy.integrate import simpson
+
+import mechatron as mt
+from mechatron.library import electrical as el
+from mechatron.library import rotational as rot
+from mechatron.library import translational as tr
+from mechatron.library.electromechanical import RotationalEMF
+from mechatron.library.mechanisms.converters import LeadScrew, RackAndPinion
+from tests.compiler.random_models import assembled, assert_same_run
+
+SEEDS = range(12)
+T_END = 0.2
+POINTS = 20001          # Simpson's rule on 1e-5 s: far finer than the drive's time scales
+
+
+class GearStage(mt.Component):
+    """A gear from ``A`` to an inertia, coupled to ``B`` by a spring and a damper."""
+
+    A = rot.Flange(doc="Input flange")
+    B = rot.Flange(doc="Output flange")
+    ratio = mt.Parameter("1", default=2.0, doc="Speed ratio of the gear")
+    J = mt.Parameter("kg*m^2", default=1e-3, min=0, doc="Inertia after the gear")
+    gear = rot.IdealGear(ratio=ratio)
+    body = rot.Inertia(J=J)
+    spring = rot.RotationalSpring(k=50.0)
+    damper = rot.RotationalDamper(D=0.05)
+
+    def equations(self):
+        return [mt.connect(self.A, self.gear.A),
+                mt.connect(self.gear.B, self.body.port, self.spring.A, self.damper.A),
+                mt.connect(self.spring.B, self.damper.B, self.B)]
+
+
+def _ends(rng, a: tuple, b: tuple) -> list[tuple]:
+    """The two attachments ``a`` and ``b`` in a random orientation of the part: either
+    as given or with the part's two ports swapped."""
+    if rng.random() < 0.5:
+        return [a, b]
+    return [(a[0], b[1]), (b[0], a[1])]
+
+
+def random_drive(seed: int, order: int = 0):
+    """The drive of ``seed`` and a builder of it (see `random_network` of
+    test_random_networks for ``order``), with ``stored`` and ``dissipated``: the energy
+    each part holds, and the power each part dissipates, as ``(kind, path, value)``."""
+    rng = random.Random(seed)
+    parts = [("src", lambda V=rng.choice((6.0, 12.0, 24.0)): el.DCVoltageSource(V=V),
+              [("s", "p"), ("g", "n")]),
+             ("gnd", el.ElectricalReference, [("g", "port")]),
+             ("fix", rot.RotationalReference, [("r", "port")])]
+    stored, dissipated = [], []
+    resistance = rng.choice((0.5, 1.0, 2.0))
+    if rng.random() < 0.7:
+        inductance = rng.choice((1e-3, 5e-3))
+        parts += [("ra", lambda: el.Resistor(R=resistance), [("s", "p"), ("e1", "n")]),
+                  ("la", lambda: el.Inductor(L=inductance), [("e1", "p"), ("e2", "n")])]
+        stored.append(("L", "la.i", inductance))
+    else:
+        parts.append(("ra", lambda: el.Resistor(R=resistance), [("s", "p"), ("e2", "n")]))
+    dissipated.append(("R", "ra.i", resistance))
+    emf_pins = _ends(rng, ("e2", "p"), ("g", "n"))
+    emf_flanges = _ends(rng, ("w0", "A"), ("r", "B"))
+    parts.append(("emf", lambda k=rng.choice((0.05, 0.1, 0.2)): RotationalEMF(k=k),
+                  emf_pins + emf_flanges))
+
+    def inertia(node: str) -> None:
+        J = rng.choice((1e-4, 5e-4, 2e-3))
+        parts.append((f"j_{node}", lambda: rot.Inertia(J=J), [(node, "port")]))
+        stored.append(("J", f"j_{node}.w", J))
+
+    inertia("w0")
+    links = rng.choice((1, 2, 3))
+    for k in range(links):
+        a, b = f"w{k}", f"w{k + 1}"
+        kind = rng.choice(("gear", "stage", "compliant"))
+        name = f"l{k}"
+        if kind == "gear":
+            ratio = rng.choice((0.5, 2.0, 3.0))
+            parts.append((name, lambda ratio=ratio: rot.IdealGear(ratio=ratio),
+                          _ends(rng, (a, "A"), (b, "B"))))
+        elif kind == "stage":
+            ratio, J = rng.choice((0.5, 2.0, 4.0)), rng.choice((2e-4, 1e-3))
+            parts.append((name, lambda ratio=ratio, J=J: GearStage(ratio=ratio, J=J),
+                          _ends(rng, (a, "A"), (b, "B"))))
+            stored += [("J", f"{name}.body.w", J), ("K", f"{name}.spring.phi", 50.0)]
+            dissipated.append(("D", f"{name}.damper.w", 0.05))
+        else:
+            spring, damping = rng.choice((20.0, 100.0)), rng.choice((0.01, 0.1))
+            ends = _ends(rng, (a, "A"), (b, "B"))
+            parts += [(f"{name}k", lambda c=spring: rot.RotationalSpring(k=c), ends),
+                      (f"{name}d", lambda d=damping: rot.RotationalDamper(D=d),
+                       _ends(rng, (a, "A"), (b, "B")))]
+            stored.append(("K", f"{name}k.phi", spring))
+            dissipated.append(("D", f"{name}d.w", damping))
+        inertia(b)
+    for k in range(links + 1):
+        if rng.random() < 0.4:
+            D = rng.choice((1e-3, 1e-2))
+            parts.append((f"loss{k}", lambda D=D: rot.RotationalDamper(D=D),
+                          _ends(rng, (f"w{k}", "A"), ("r", "B"))))
+            dissipated.append(("D", f"loss{k}.w", D))
+    if rng.random() < 0.6:
+        make = (lambda: RackAndPinion(r=0.02, eta=1.0, eta_back=1.0)) if rng.random() < 0.5 \
+            else (lambda: LeadScrew(lead=0.01, eta=1.0, eta_back=1.0))
+        mass, b = rng.choice((0.5, 2.0)), rng.choice((5.0, 20.0))
+        parts += [("conv", make, [(f"w{links}", "R"), ("x", "T")]),
+                  ("carriage", lambda: tr.Mass(m=mass), [("x", "port")]),
+                  ("ground", tr.TranslationalReference, [("xg", "port")]),
+                  ("guide", lambda: tr.TranslationalDamper(b=b),
+                   _ends(rng, ("x", "A"), ("xg", "B")))]
+        stored.append(("M", "carriage.v", mass))
+        dissipated += [("B", "guide.v", b), ("P", "conv.P_loss", 1.0)]
+        if rng.random() < 0.5:
+            k = rng.choice((500.0, 2000.0))
+            parts.append(("return", lambda: tr.TranslationalSpring(k=k),
+                          _ends(rng, ("x", "A"), ("xg", "B"))))
+            stored.append(("K", "return.x", k))
+    fresh = assembled(f"drive{seed}", parts, [], seed, order)
+    fresh.stored, fresh.dissipated = stored, dissipated
+    return fresh
+
+
+def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The energy the source delivered, the energy stored and the energy dissipated, at
+    each output time, from the parts' parameters and logged variables."""
+    delivered = -res["src.v"] * res["src.i"]
+    stored = sum(0.5 * value * res[path] ** 2 for _, path, value in build.stored)
+    power = sum(value * res[path] if kind == "P" else value * res[path] ** 2
+                for kind, path, value in build.dissipated)
+    t = res.t
+    running = [np.concatenate(([0.0], np.cumsum(np.diff(t) * (p[1:] + p[:-1]) / 2)))
+               for p in (delivered, power)]
+    # the ends of the run by Simpson's rule, the running sums by the trapezoid rule
+    return (running[0], stored, running[1],
+            simpson(delivered, x=t), simpson(power, x=t))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_random_drives_conserve_energy(seed):
+    build = random_drive(seed)
+    res = mt.simulate(mt.compile_model(build()), T_END, rtol=1e-10, atol=1e-12,
+                      t_out=np.linspace(0.0, T_END, POINTS), log="all")
+    delivered, stored, lost, delivered_end, lost_end = energies(build, res)
+    assert delivered_end > 0.0 and stored[-1] > 0.0
+    # at the end: to the accuracy of Simpson's rule on the logged powers
+    assert abs(delivered_end - stored[-1] - lost_end) <= 1e-9 * delivered_end
+    # throughout: to the trapezoid rule's
+    assert np.max(np.abs(delivered - stored - lost)) <= 1e-5 * delivered_end
+
+
+@pytest.mark.parametrize("seed", SEEDS[:6])
+def test_a_drive_drawn_in_another_order_runs_the_same(seed):
+    assert_same_run(mt.compile_model(random_drive(seed)()),
+                    mt.compile_model(random_drive(seed, order=1)()), T_END)
