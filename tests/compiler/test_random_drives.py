@@ -121,6 +121,9 @@ def random_drive(seed: int, order: int = 0):
                           _ends(rng, (f"w{k}", "A"), ("r", "B"))))
             dissipated.append(("D", f"loss{k}.w", D))
     if rng.random() < 0.6:
+        # lossless: a lossy screw whose load reverses it (the return spring) would stick
+        # at zero speed, which RotTransConverter does not model (its documented limit):
+        # such a run stops with a chattering error naming the converter
         make = (lambda: RackAndPinion(r=0.02, eta=1.0, eta_back=1.0)) if rng.random() < 0.5 \
             else (lambda: LeadScrew(lead=0.01, eta=1.0, eta_back=1.0))
         mass, b = rng.choice((0.5, 2.0)), rng.choice((5.0, 20.0))
