@@ -415,6 +415,26 @@ def test_random_networks_follow_the_nodal_analysis(seed, pulses):
                                    err_msg=name)
 
 
+@pytest.mark.parametrize("solver", ["rosenbrock", "rk45", "rodas4"])
+def test_an_edge_on_an_output_time_is_logged_after_the_edge(solver):
+    """Seed 2's pulse train falls at t = 0.018000000000000002, one of the output times:
+    its indicator is zero there, and the crossing is seen in the next interval. Every
+    solver logs the network after the edge at that time, as the nodal analysis has it
+    (CasADi's Rosenbrock plug-in logged the state before it: the source's voltage 100 %
+    off)."""
+    build = random_network(2, pulses=True)
+    t_out = np.linspace(0.0, T_END, 41)
+    edges = [t for t, _ in build.source[1:]]
+    assert set(edges) & set(t_out.tolist())
+    res = mt.simulate(mt.compile_model(build()), T_END, solver=solver, t_out=t_out,
+                      log="all")
+    exact = nodal_solution(build.netlist(), build.source, res.t)
+    for name, values in exact.items():
+        scale = max(1.0, float(np.max(np.abs(values))))
+        np.testing.assert_allclose(res[name], values, rtol=0, atol=1e-5 * scale,
+                                   err_msg=name)
+
+
 #: seeds whose source is a constant one (its voltage a parameter, the input linearized)
 DC_SEEDS = [s for s in range(16) if len(random_network(s).source) == 1]
 

@@ -14,7 +14,7 @@ from mechatron.errors import RunTooLargeError, SimulationError
 from mechatron.results import SimResult, SolverStats
 from mechatron.solvers.diagnose import describe_nonfinite
 from mechatron.solvers.fixed import METHODS, integrate_fixed
-from mechatron.solvers.hybrid import terminal_event
+from mechatron.solvers.hybrid import events_on_outputs, terminal_event
 from mechatron.solvers.initial import initialize
 from mechatron.solvers.inputs import resolve_inputs
 from mechatron.solvers.logging import OutputColumns, evaluate_outputs, evaluate_point
@@ -221,6 +221,7 @@ def simulate(model, t_stop: float, *, solver: str = "auto", dt: float | None = N
                                             atol=atol, max_step=h_max, inputs=ext,
                                             linear_solver=linear_solver)
         p_log = p if ext is None else ext.logged_columns(p, grid)
+        events_on_outputs(cm, grid, X, Z, p_log)
         if cm.nz and Z.size:
             Z = consistent_algebraics(cm, grid, X, Z, p_log, used)
         t, Xf = grid, X[:, -1]

@@ -21,6 +21,7 @@ import numpy as np
 from mechatron.compiler.compiled import CompiledModel
 from mechatron.errors import SimulationError
 from mechatron.solvers.fpenv import subnormals_flushed
+from mechatron.solvers.hybrid import EVENT_TOL
 from mechatron.solvers.inputs import driven_parameters
 from mechatron.solvers.logging import evaluate_point
 
@@ -326,7 +327,7 @@ def _integrator(cm: CompiledModel, plugin: str, grid: np.ndarray, rtol: float,
         post_x, post_z = cm.f_transition(idx, t, X, z, pe)
         opts["transition"] = ca.Function("transition", [idx, tau, X, z, p, u],
                                          [post_x, post_z], ca.event_in(), ca.event_out())
-        opts["event_tol"] = 1e-13
+        opts["event_tol"] = EVENT_TOL
         opts["max_events"] = 100_000_000
         opts["max_event_iter"] = 100
     if plugin == "idas":
