@@ -11,7 +11,12 @@ and without an inductor the current is algebraic. Whatever the compiler chose, t
 the source delivers, integrated over the run, must equal the energy stored (in the
 inductor, inertias, mass and springs, from their parameters and logged variables) plus
 the energy dissipated (resistor, dampers, converter losses): a sign wrong in a converter,
-a gear or a connection set creates or destroys energy."""
+a gear or a connection set creates or destroys energy.
+
+Hydrostatic drives do the same through a fourth domain: the motor turns a pump that feeds
+a line of chambers joined by pipes and orifices, ending in a hydraulic motor that turns a
+load, or in a pipe back to the tank; pumps and motors may leak, and pipes may hold a
+compressible volume of their own."""
 
 from __future__ import annotations
 
@@ -23,6 +28,7 @@ from scipy.integrate import simpson
 
 import mechatron as mt
 from mechatron.library import electrical as el
+from mechatron.library import hydraulic as hy
 from mechatron.library import rotational as rot
 from mechatron.library import translational as tr
 from mechatron.library.electromechanical import RotationalEMF
@@ -30,6 +36,9 @@ from mechatron.library.mechanisms.converters import LeadScrew, RackAndPinion
 from tests.compiler.random_models import assembled, assert_same_run
 
 SEEDS = range(12)
+#: the (across, through) variables of a hydraulic two-port's ports: the power entering
+#: at each is their product
+_HYDRAULIC = (("A.p", "A.q"), ("B.p", "B.q"))
 T_END = 0.2
 POINTS = 20001          # Simpson's rule on 1e-5 s: far finer than the drive's time scales
 
@@ -144,13 +153,92 @@ def random_drive(seed: int, order: int = 0):
     return fresh
 
 
+def random_hydrostatic_drive(seed: int, order: int = 0):
+    """A hydrostatic drive of ``seed`` and a builder of it, with ``stored`` and
+    ``dissipated`` as in `random_drive` (kind ``"W"``: a pipe or orifice, whose loss is
+    the power entering it at its ports, pressure times flow in; ``"V"``: a pipe with a
+    volume, that less what the volume takes)."""
+    rng = random.Random(seed)
+    beta = 1e7        # a soft fluid: the chambers' time constants of milliseconds
+    resistance, k = rng.choice((0.5, 1.0)), rng.choice((0.1, 0.2))
+    parts = [("src", lambda V=rng.choice((12.0, 24.0)): el.DCVoltageSource(V=V),
+              [("s", "p"), ("g", "n")]),
+             ("gnd", el.ElectricalReference, [("g", "port")]),
+             ("fix", rot.RotationalReference, [("r", "port")]),
+             ("tank", hy.HydraulicReference, [("t", "port")]),
+             ("ra", lambda: el.Resistor(R=resistance), [("s", "p"), ("e", "n")]),
+             ("emf", lambda: RotationalEMF(k=k),
+              _ends(rng, ("e", "p"), ("g", "n")) + _ends(rng, ("w", "A"), ("r", "B"))),
+             ("rotor", lambda: rot.Inertia(J=1e-3), [("w", "port")])]
+    stored, dissipated = [("J", "rotor.w", 1e-3)], [("R", "ra.i", resistance)]
+    leak = rng.choice((0.0, 1e-12))
+    parts.append(("pump", lambda: hy.FixedDisplacementPump(D=2e-6, k_leak=leak),
+                  [("t", "A"), ("h0", "B"), ("w", "shaft"), ("r", "case")]))
+    dissipated.append(("R", "pump.dp", leak))       # its leak: k_leak dp^2
+
+    def chamber(node: str) -> None:
+        V = rng.choice((1e-4, 5e-4))
+        parts.append((f"c_{node}", lambda: hy.ConstantVolumeChamber(V=V, beta=beta),
+                      [(node, "port")]))
+        stored.append(("C", f"c_{node}.p", V / beta))
+
+    chamber("h0")
+    lines = rng.choice((1, 2, 3))
+    for j in range(lines):
+        a, b, name = f"h{j}", f"h{j + 1}", f"line{j}"
+        kind = rng.choice(("pipe", "volume", "orifice"))
+        if kind == "pipe":
+            make = lambda: hy.ResistivePipe(length=2.0, D=4e-3)
+        elif kind == "volume":      # its own volume: V = pi D^2 / 4 length
+            make = lambda: hy.CompressiblePipe(length=2.0, D=4e-3, beta=beta)
+            stored.append(("C", f"{name}.p", np.pi * 4e-3 ** 2 / 4 * 2.0 / beta))
+        else:
+            make = lambda: hy.FixedOrifice(area=2e-6)
+        ends = _ends(rng, (a, "A"), (b, "B"))
+        parts.append((name, make, ends))
+        # a pipe with a volume loses what enters less what its volume takes, p (A.q + B.q)
+        dissipated.append(("V" if kind == "volume" else "W", name, _HYDRAULIC))
+        chamber(b)
+    end = f"h{lines}"
+    if rng.random() < 0.6:
+        leak_m = rng.choice((0.0, 1e-12))
+        parts += [("motor", lambda: hy.FixedDisplacementMotor(D=1e-6, k_leak=leak_m),
+                   [(end, "A"), ("t", "B"), ("m", "shaft"), ("r", "case")]),
+                  ("load", lambda: rot.Inertia(J=2e-4), [("m", "port")]),
+                  ("brake", lambda: rot.RotationalDamper(D=1e-3),
+                   _ends(rng, ("m", "A"), ("r", "B")))]
+        stored.append(("J", "load.w", 2e-4))
+        dissipated += [("R", "motor.dp", leak_m), ("D", "brake.w", 1e-3)]
+    parts.append(("relief", lambda: hy.ResistivePipe(length=5.0, D=3e-3),
+                  _ends(rng, (end, "A"), ("t", "B"))))
+    dissipated.append(("W", "relief", _HYDRAULIC))
+    fresh = assembled(f"hydro{seed}", parts, [], seed, order)
+    fresh.stored, fresh.dissipated = stored, dissipated
+    return fresh
+
+
 def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The energy the source delivered, the energy stored and the energy dissipated, at
     each output time, from the parts' parameters and logged variables."""
     delivered = -res["src.v"] * res["src.i"]
     stored = sum(0.5 * value * res[path] ** 2 for _, path, value in build.stored)
-    power = sum(value * res[path] if kind == "P" else value * res[path] ** 2
-                for kind, path, value in build.dissipated)
+    def loss(kind, path, value):
+        if kind == "P":
+            return value * res[path]
+        if kind in ("W", "V"):
+            entering = sum(res[f"{path}.{a}"] * res[f"{path}.{b}"] for a, b in value)
+            if kind == "V":
+                entering = entering - res[f"{path}.p"] * (res[f"{path}.A.q"]
+                                                          + res[f"{path}.B.q"])
+            return entering
+        return value * res[path] ** 2
+
+    losses = [loss(*entry) for entry in build.dissipated]
+    # a loss computed from a part's ports must be one: a sign wrong inside would make
+    # the part a source and still balance
+    scale = max(float(np.max(np.abs(p))) for p in losses)
+    assert all(np.min(p) >= -1e-9 * scale for p in losses)
+    power = sum(losses)
     t = res.t
     running = [np.concatenate(([0.0], np.cumsum(np.diff(t) * (p[1:] + p[:-1]) / 2)))
                for p in (delivered, power)]
@@ -176,3 +264,20 @@ def test_random_drives_conserve_energy(seed):
 def test_a_drive_drawn_in_another_order_runs_the_same(seed):
     assert_same_run(mt.compile_model(random_drive(seed)()),
                     mt.compile_model(random_drive(seed, order=1)()), T_END)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_random_hydrostatic_drives_conserve_energy(seed):
+    build = random_hydrostatic_drive(seed)
+    res = mt.simulate(mt.compile_model(build()), T_END, rtol=1e-10, atol=1e-12,
+                      t_out=np.linspace(0.0, T_END, POINTS), log="all")
+    delivered, stored, lost, delivered_end, lost_end = energies(build, res)
+    assert delivered_end > 0.0 and stored[-1] > 0.0
+    assert abs(delivered_end - stored[-1] - lost_end) <= 1e-9 * delivered_end
+    assert np.max(np.abs(delivered - stored - lost)) <= 1e-5 * delivered_end
+
+
+@pytest.mark.parametrize("seed", SEEDS[:4])
+def test_a_hydrostatic_drive_drawn_in_another_order_runs_the_same(seed):
+    assert_same_run(mt.compile_model(random_hydrostatic_drive(seed)()),
+                    mt.compile_model(random_hydrostatic_drive(seed, order=1)()), T_END)
