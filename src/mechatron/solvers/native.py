@@ -9,12 +9,13 @@ step-size control on the RMS error weighted by ``atol + rtol |x|``) is appended,
 whole translation unit is compiled once with the system C compiler into a shared library
 kept in the cache directory (``$MECHATRON_CACHE`` or ``~/.cache/mechatron``; the file
 name holds a hash of the source and flags). One call then integrates the whole run and
-writes every logged variable at every output time (cubic Hermite interpolation between
-steps), so Python only prepares arrays and reads the result.
+writes every logged variable at every output time (Rodas4's own dense output between
+steps, of order 3, built from the step's stages), so Python only prepares arrays and
+reads the result.
 
 Events: after every accepted step the relations' indicators (mode times distance) are
-checked; one that went from positive to zero or below is located on the step's Hermite
-interpolant (secant iteration with Illinois safeguard, to :data:`EVENT_TOL`), and the
+checked; one that went from positive to zero or below is located on the step's dense
+output (secant iteration with Illinois safeguard, to :data:`EVENT_TOL`), and the
 model's compiled transition (the same one the CasADi integrators call) updates the modes,
 counters and discrete states before the integration restarts at the event.
 

@@ -10,7 +10,7 @@
  *   mt_trans(k, t, x, m, p) -> X        the state after an event of relation k
  * and to the sizes MT_NX, MT_NR, MT_NY and the chattering mark MT_CHATTER_FLAG (see
  * mechatron.compiler.events).  One call integrates from tout[0] to tout[nout - 1] and
- * writes y at every output time (cubic Hermite interpolation of x between steps, exact
+ * writes y at every output time (Rodas4's dense output of x between steps, order 3, exact
  * at the steps), so the whole run is a single native call.
  *
  * One step of size h from (t0, x0), with W = I / (h gamma) - J(t0, x0):
@@ -45,6 +45,13 @@ static const double mt_c[15] = {
     -6.058818238834054};
 static const double mt_m[MT_STAGES] = {
     1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950, 1.0, 1.0};
+/* the dense output's two stage combinations (Hairer & Wanner's RODAS code) */
+static const double mt_d2[MT_STAGES - 1] = {
+    10.12623508344586, -7.487995877610167, -34.80091861555747, -7.992771707568823,
+    1.025137723295662};
+static const double mt_d3[MT_STAGES - 1] = {
+    -0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386,
+    -6.594389125716872};
 
 enum {
     MT_OK = 0, MT_MAX_STEPS = -1, MT_STEP_TOO_SMALL = -2, MT_NOT_FINITE = -3,
@@ -209,23 +216,24 @@ static void mt_eval_transition(mt_model *md, int k, double t, double *x, double 
 }
 #endif
 
-/* Cubic Hermite interpolation between (x0, f0) at t0 and (x1, f1) at t0 + h. */
-static void mt_hermite(const double *x0, const double *f0, const double *x1,
-                       const double *f1, double h, double th, double *out, int n) {
-    double th2 = th * th, th3 = th2 * th;
-    double a0 = 2 * th3 - 3 * th2 + 1, b0 = (th3 - 2 * th2 + th) * h;
-    double a1 = -2 * th3 + 3 * th2, b1 = (th3 - th2) * h;
+/* The step's dense output at t0 + th h, Rodas4's own (order 3, from its stages):
+ *   x(th) = x0 (1 - th) + th (x1 + (1 - th) (d2 + th d3)),  d2, d3 = sums of D2, D3 times k
+ * Built from the stages, it stays bounded inside a step over a fast transient, where a
+ * cubic Hermite through f at the ends overshoots by h f0 (f of a stiff mode is huge at the
+ * step's start): the mmf of an eddy-current path (G dphi/dt) read 600 times its value. Written as
+ * x0 + th (...) so that a state that does not move (a discrete one: x1 = x0, its stages
+ * zero) is reproduced exactly. */
+static void mt_dense(const double *x0, const double *x1, const double *d2, const double *d3,
+                     double th, double *out, int n) {
+    double s1 = 1.0 - th;
     int i;
-    (void)a0;
-    /* x0 + a1 (x1 - x0): a state that does not move between the steps (a discrete
-     * state, der = 0) is reproduced exactly, not up to rounding of a0 + a1 = 1 */
-    for (i = 0; i < n; ++i) out[i] = x0[i] + a1 * (x1[i] - x0[i]) + b0 * f0[i] + b1 * f1[i];
+    for (i = 0; i < n; ++i) out[i] = x0[i] + th * ((x1[i] - x0[i]) + s1 * (d2[i] + th * d3[i]));
 }
 
 /* Integrate; see the top of the file.  x0 holds the whole integration state
  * X = [x; modes; counters; event times] (MT_NX + MT_NM values), and so does xf at the end.
  * Relations: after every accepted step the indicators g = mode * distance are checked; one
- * that went from positive to <= 0 is an event, located on the Hermite interpolant by a
+ * that went from positive to <= 0 is an event, located on the dense output by a
  * safeguarded secant (Illinois) iteration to event_tol, after which the compiled transition
  * updates X and the integration restarts there.  info (10 entries) receives the accepted
  * steps, rejected steps, f evaluations, Jacobian evaluations, LU factorizations, the time
@@ -241,7 +249,8 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
     long k_out = 0, steps = 0, rejected = 0, njev = 0, nlu = 0, events = 0, nzero = 0;
     long same_time = 0, it;
     int i, j, s, status = MT_OK, reject_run = 0;
-    double *mem, *x, *x1, *f0, *f1, *fs, *ys, *jac, *ft, *w, *ks, *g0, *g1, *ga, *gb, *gc;
+    double *mem, *x, *x1, *f0, *f1, *fs, *ys, *jac, *ft, *w, *ks, *d2, *d3, *g0, *g1, *ga, *gb,
+        *gc;
     double *xpost;
     int *piv;
     mt_model md;
@@ -263,7 +272,7 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
         status = MT_NO_MEMORY;
         goto release;
     }
-    mem = (double *)malloc(sizeof(double) * (8 * nn + 2 * nn * nn + MT_STAGES * nn +
+    mem = (double *)malloc(sizeof(double) * (8 * nn + 2 * nn * nn + (MT_STAGES + 2) * nn +
                                              11 * nr + nn + 1));
     piv = (int *)malloc(sizeof(int) * nn);
     if (!mem || !piv) {
@@ -282,7 +291,9 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
     jac = ft + 2 * nn;
     w = jac + nn * nn;
     ks = w + nn * nn;
-    g0 = ks + MT_STAGES * nn;
+    d2 = ks + MT_STAGES * nn;
+    d3 = d2 + nn;
+    g0 = d3 + nn;
     g1 = g0 + nr;
     ga = g1 + nr;
     gb = ga + nr;
@@ -405,6 +416,15 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
             h *= fac;
             continue;
         }
+        for (i = 0; i < n; ++i) {
+            double a = 0.0, b = 0.0;
+            for (s = 0; s < MT_STAGES - 1; ++s) {
+                a += mt_d2[s] * ks[(size_t)s * nn + i];
+                b += mt_d3[s] * ks[(size_t)s * nn + i];
+            }
+            d2[i] = a;
+            d3[i] = b;
+        }
         t1 = last ? tend : t + h;
         mt_eval_f(&md, t1, x1, f1);
         if (!mt_all_finite(f1, n)) {
@@ -442,7 +462,7 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
                     if (tc < ta + 0.5 * event_tol) tc = ta + 0.5 * event_tol;
                     if (tc > tb - 0.5 * event_tol) tc = tb - 0.5 * event_tol;
                     if (!(tc > ta && tc < tb)) tc = 0.5 * (ta + tb);
-                    mt_hermite(x, f0, x1, f1, t1 - t, (tc - t) / (t1 - t), ys, n);
+                    mt_dense(x, x1, d2, d3, (tc - t) / (t1 - t), ys, n);
                     mt_eval_zero(&md, tc, ys, gc);
                     ++nzero;
                     for (i = 0; i < MT_NR; ++i)
@@ -466,11 +486,11 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
                  * inside it (within event_tol of the event, e.g. at a clock tick) shows
                  * the state after the event, as the CasADi integrators do */
                 while (k_out < nout && tout[k_out] < ta) {
-                    mt_hermite(x, f0, x1, f1, t1 - t, (tout[k_out] - t) / (t1 - t), ys, n);
+                    mt_dense(x, x1, d2, d3, (tout[k_out] - t) / (t1 - t), ys, n);
                     mt_eval_out(&md, tout[k_out], ys, y + (size_t)k_out * MT_NY);
                     ++k_out;
                 }
-                mt_hermite(x, f0, x1, f1, t1 - t, (te - t) / (t1 - t), ys, n);
+                mt_dense(x, x1, d2, d3, (te - t) / (t1 - t), ys, n);
                 mt_eval_zero(&md, te, ys, gc);
                 ++nzero;
                 for (i = 0; i < MT_NR; ++i)
@@ -512,9 +532,9 @@ int mt_rodas4(const double *tout, long nout, const double *x0, const double *p,
             for (i = 0; i < MT_NR; ++i) g0[i] = g1[i];
         }
 #endif
-        /* outputs inside (t, t1]: cubic Hermite between (x, f0) and (x1, f1) */
+        /* outputs inside (t, t1]: the step's dense output */
         while (k_out < nout && tout[k_out] <= t1) {
-            mt_hermite(x, f0, x1, f1, t1 - t, (tout[k_out] - t) / (t1 - t), ys, n);
+            mt_dense(x, x1, d2, d3, (tout[k_out] - t) / (t1 - t), ys, n);
             mt_eval_out(&md, tout[k_out], ys, y + (size_t)k_out * MT_NY);
             ++k_out;
         }
