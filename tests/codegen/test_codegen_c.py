@@ -254,10 +254,10 @@ def test_c_flushes_subnormals_as_the_desktop_does_and_matches_it_bit_for_bit(tmp
     (mechatron.solvers.fpenv); the harness sets the same mode (mt_fpmode.h), so both give
     the same numbers and neither holds a subnormal."""
     from mechatron.solvers.fpenv import flushing_available
-    from tests.solvers.test_fpenv import rc_ladder
+    from tests.solvers.test_logging import ladder
     if not flushing_available():
         pytest.skip("no known floating-point environment layout: the desktop runs unflushed")
-    cm = mt.compile_model(rc_ladder(120, C=1e-3))
+    cm = mt.compile_model(ladder(120))
     code = generate_c(cm, tmp_path, solver="rk4", dt=1e-6, t_stop=3e-5)
     build(code)
     c_res = run_harness(code)

@@ -7,9 +7,9 @@ import pytest
 
 import mechatron as mt
 from mechatron.errors import SimulationError
-from mechatron.library import electrical as el
 from mechatron.solvers import fpenv
 from mechatron.solvers.fpenv import flushing_available, subnormals_flushed, subnormals_kept
+from tests.solvers.test_logging import ladder
 
 SUBNORMAL = 1e-310          # below np.finfo(float).tiny = 2.2e-308
 TINY = np.finfo(float).tiny
@@ -22,24 +22,6 @@ needs_flush = pytest.mark.skipif(not flushing_available(),
 def flushes() -> bool:
     """Whether this thread's arithmetic now takes subnormal operands as zero."""
     return (np.array([SUBNORMAL]) * 1.0)[0] == 0.0
-
-
-def rc_ladder(n: int, C: float = 1.0) -> mt.System:
-    """Sections of 1 Ohm and ``C``: a step at the source travels about one section in
-    ``R C``."""
-    m = mt.System(f"ladder_{n}")
-    src = m.add("src", el.DCVoltageSource(V=1.0))
-    gnd = m.add("gnd", el.ElectricalReference())
-    m.connect(src.n, gnd.port)
-    node = src.p
-    for k in range(n):
-        r = m.add(f"r{k}", el.Resistor(R=1.0))
-        c = m.add(f"c{k}", el.Capacitor(C=C))
-        m.connect(node, r.p)
-        m.connect(r.n, c.p)
-        m.connect(c.n, gnd.port)
-        node = r.n
-    return m
 
 
 def test_outside_a_run_subnormals_are_numbers():
@@ -76,7 +58,7 @@ def test_a_long_ladder_runs_flushed_with_the_values_of_an_unflushed_run(monkeypa
     # each implicit step spreads the source's step along the whole ladder, decaying
     # geometrically: a band of capacitors sits below 1e-308 (3 % of the values here, three
     # quarters of them in a ladder of 10000 sections of 1 mF)
-    cm = mt.compile_model(rc_ladder(200))
+    cm = mt.compile_model(ladder(200, c=1.0))
     t_out = np.linspace(0.0, 1.0, 101)
     names = [f"c{k}.v" for k in range(200)] + [f"r{k}.i" for k in range(0, 200, 7)]
     with monkeypatch.context() as m:

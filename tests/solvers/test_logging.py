@@ -20,7 +20,9 @@ from mechatron.solvers import logging as simlog
 R, C, V = 1.0, 1e-3, 1.0
 
 
-def ladder(n: int) -> mt.System:
+def ladder(n: int, c: float = C) -> mt.System:
+    """``n`` sections of ``R`` in series and ``c`` to ground after a source of ``V``: a
+    step at the source travels about one section in ``R c``."""
     m = mt.System(f"ladder_{n}")
     src = m.add("src", el.DCVoltageSource(V=V))
     gnd = m.add("gnd", el.ElectricalReference())
@@ -28,10 +30,10 @@ def ladder(n: int) -> mt.System:
     node = src.p
     for k in range(n):
         r = m.add(f"r{k}", el.Resistor(R=R))
-        c = m.add(f"c{k}", el.Capacitor(C=C))
+        cap = m.add(f"c{k}", el.Capacitor(C=c))
         m.connect(node, r.p)
-        m.connect(r.n, c.p)
-        m.connect(c.n, gnd.port)
+        m.connect(r.n, cap.p)
+        m.connect(cap.n, gnd.port)
         node = r.n
     return m
 
