@@ -18,7 +18,10 @@ a line of chambers joined by pipes and orifices, ending in a hydraulic motor tha
 load, or in a pipe back to the tank; pumps and motors may leak, and pipes may hold a
 compressible volume of their own. And magnetic actuators: coils on a circuit of
 reluctances, eddy-current paths and an air gap whose force moves a sprung armature, a
-second coil perhaps loaded by a resistor."""
+second coil perhaps loaded by a resistor. And heaters: resistors whose resistance follows
+their temperature, warming heat capacitors that lose heat to the ambient by conduction,
+convection and radiation; there the first law reads delivered = heat stored (C times the
+rise) + heat given to the ambient + the losses of plain resistors."""
 
 from __future__ import annotations
 
@@ -33,6 +36,7 @@ from mechatron.library import electrical as el
 from mechatron.library import hydraulic as hy
 from mechatron.library import magnetic as mg
 from mechatron.library import rotational as rot
+from mechatron.library import thermal as th
 from mechatron.library import translational as tr
 from mechatron.library.electromechanical import RotationalEMF
 from mechatron.library.mechanisms.converters import LeadScrew, RackAndPinion
@@ -278,6 +282,55 @@ def random_magnetic_actuator(seed: int, order: int = 0):
     return fresh
 
 
+def random_heater(seed: int, order: int = 0):
+    """A heater of ``seed`` and a builder of it, with ``stored`` (kind ``"T"``: a heat
+    capacitor's ``C (T - T(0))``) and ``dissipated`` (kind ``"P"``: the heat flowing into
+    the ambient) as in `random_drive`."""
+    rng = random.Random(seed)
+    ambient = 293.15
+    parts = [("src", lambda V=rng.choice((6.0, 12.0)): el.DCVoltageSource(V=V),
+              [("s", "p"), ("g", "n")]),
+             ("gnd", el.ElectricalReference, [("g", "port")]),
+             ("amb", lambda: th.FixedTemperature(T=ambient), [("a", "port")])]
+    stored, dissipated = [], [("P", "amb.port.Q", 1.0)]
+    heaters = rng.choice((1, 2, 3))
+    series = rng.random() < 0.5     # heaters in series, or in parallel from one node
+    for k in range(heaters):
+        a, b = ("s", "g") if not series else ("s" if k == 0 else f"e{k}",
+                                                "g" if k == heaters - 1 else f"e{k + 1}")
+        R = rng.choice((5.0, 10.0, 20.0))
+        alpha = rng.choice((0.0, 0.004, -0.002))
+        node = f"h{rng.randrange(k + 1)}"       # heaters may share a heat capacitor
+        parts.append((f"heater{k}",
+                      lambda R=R, alpha=alpha: el.HeatingResistor(R_ref=R, alpha=alpha,
+                                                                  T_ref=ambient),
+                      _ends(rng, (a, "p"), (b, "n")) + [(node, "heat_port")]))
+    if rng.random() < 0.5:          # a plain resistor: its loss is not ported
+        parts.append(("bleed", lambda: el.Resistor(R=50.0), [("s", "p"), ("g", "n")]))
+        dissipated.append(("R", "bleed.i", 50.0))
+    nodes = sorted({f"h{k}" for k in range(heaters)})
+    for k, node in enumerate(nodes):
+        C = rng.choice((0.02, 0.05))
+        parts.append((f"mass{k}", lambda C=C: th.HeatCapacitor(C=C, T=ambient),
+                      [(node, "port")]))
+        stored.append(("T", f"mass{k}.T", C))
+        other = rng.choice(nodes[:k] + ["a"])
+        kind = rng.choice(("conductor", "resistor", "convection"))
+        if kind == "conductor":
+            make = lambda G=rng.choice((0.2, 0.5)): th.ThermalConductor(G=G)
+        elif kind == "resistor":
+            make = lambda R=rng.choice((2.0, 5.0)): th.ThermalResistor(R=R)
+        else:
+            make = lambda: th.ConvectiveHeatTransfer(h=20.0, area=0.01)
+        parts.append((f"path{k}", make, _ends(rng, (node, "A"), (other, "B"))))
+        if rng.random() < 0.4:
+            parts.append((f"glow{k}", lambda: th.BodyRadiation(Gr=1e-3),
+                          _ends(rng, (node, "A"), ("a", "B"))))
+    fresh = assembled(f"heater{seed}", parts, [], seed, order)
+    fresh.stored, fresh.dissipated = stored, dissipated
+    return fresh
+
+
 def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The energy the source delivered, the energy stored and the energy dissipated, at
     each output time, from the parts' parameters and logged variables."""
@@ -287,6 +340,8 @@ def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             return 0.5 * value * res[f"{path}.phi"] ** 2
         if kind == "X":
             return 0.5 * res[f"{path}.x"] / (mg.MU0 * value) * res[f"{path}.phi"] ** 2
+        if kind == "T":
+            return value * (res[path] - res[path][0])
         return 0.5 * value * res[path] ** 2
 
     stored = sum(energy(*entry) for entry in build.stored)
@@ -329,13 +384,13 @@ def balanced(build, end: float, running: float, solver: str = "auto"):
     return res
 
 
-#: each kind of machine, and the tolerances of its balance: a magnetic actuator to 1e-7,
-#: since a coil on a bare reluctance circuit is one first-order lag that the solver
-#: crosses in a few dozen steps, and the values between them come from its dense output
-#: (order 3), not from steps
+#: each kind of machine, and the tolerances of its balance: a magnetic actuator and a
+#: heater to 1e-7, since their slow first-order lags are crossed in a few dozen steps, and
+#: the values between the steps come from the solver's dense output (order 3)
 KINDS = {"drive": (random_drive, 1e-9, 1e-5),
          "hydrostatic": (random_hydrostatic_drive, 1e-9, 1e-5),
-         "magnetic": (random_magnetic_actuator, 1e-7, 1e-6)}
+         "magnetic": (random_magnetic_actuator, 1e-7, 1e-6),
+         "heater": (random_heater, 1e-7, 1e-6)}
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -345,7 +400,8 @@ def test_random_machines_conserve_energy(kind, seed):
     balanced(make(seed), end, running)
 
 
-@pytest.mark.parametrize("kind,seeds", [("drive", 6), ("hydrostatic", 4), ("magnetic", 4)])
+@pytest.mark.parametrize("kind,seeds", [("drive", 6), ("hydrostatic", 4),
+                                                ("magnetic", 4), ("heater", 4)])
 def test_a_machine_drawn_in_another_order_runs_the_same(kind, seeds):
     make = KINDS[kind][0]
     for seed in range(seeds):
