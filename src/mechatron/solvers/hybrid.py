@@ -13,7 +13,8 @@ from mechatron.compiler.compiled import CompiledModel
 
 __all__ = ["terminal_event", "events_on_outputs", "loop_message", "EVENT_TOL"]
 
-#: Relative tolerance to which the CasADi integrators locate an event in time.
+#: Tolerance in time (s) to which the CasADi integrators locate an event; an output this
+#: close to an event, scaled by the run's largest time above 1 s, is at the event.
 EVENT_TOL = 1e-13
 
 
