@@ -120,10 +120,9 @@ else:
 grid = np.linspace(0.0, %(T)r, %(NOUT)d)
 base = status_mb("VmRSS")     # SciPy imported, the ODE set up, nothing solved yet
 times, cpu = [], []
-if flush:
+if flush:       # each solve flushed, as Mechatron's solvers run (mechatron.solvers.fpenv)
     from mechatron.solvers.fpenv import subnormals_flushed
-    flushing = subnormals_flushed()     # kept: its exit restores the environment
-    flushing.__enter__()
+    solve_ivp = subnormals_flushed()(solve_ivp)
 for _ in range(repeats):
     sol = None          # one run's solution at a time, as on the Mechatron side
     t, c = time.perf_counter(), time.process_time()

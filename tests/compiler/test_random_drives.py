@@ -29,7 +29,7 @@ import random
 
 import numpy as np
 import pytest
-from scipy.integrate import simpson
+from scipy.integrate import cumulative_trapezoid, simpson
 
 import mechatron as mt
 from mechatron.library import electrical as el
@@ -331,10 +331,13 @@ def random_heater(seed: int, order: int = 0):
     return fresh
 
 
-def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The energy the source delivered, the energy stored and the energy dissipated, at
-    each output time, from the parts' parameters and logged variables."""
+def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
+    """The energy the source delivered, the energy stored and the energy dissipated at
+    each output time (the integrals by the trapezoid rule), from the parts' parameters and
+    logged variables; then the delivered and dissipated energy at the end by Simpson's
+    rule. Checks on the way that every loss read from a part's ports is one."""
     delivered = -res["src.v"] * res["src.i"]
+
     def energy(kind, path, value):
         if kind == "F":
             return 0.5 * value * res[f"{path}.phi"] ** 2
@@ -345,6 +348,7 @@ def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return 0.5 * value * res[path] ** 2
 
     stored = sum(energy(*entry) for entry in build.stored)
+
     def loss(kind, path, value):
         if kind == "P":
             return value * res[path]
@@ -363,10 +367,8 @@ def energies(build, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     assert all(np.min(p) >= -1e-9 * scale for p in losses)
     power = sum(losses)
     t = res.t
-    running = [np.concatenate(([0.0], np.cumsum(np.diff(t) * (p[1:] + p[:-1]) / 2)))
-               for p in (delivered, power)]
-    # the ends of the run by Simpson's rule, the running sums by the trapezoid rule
-    return (running[0], stored, running[1],
+    return (cumulative_trapezoid(delivered, t, initial=0.0), stored,
+            cumulative_trapezoid(power, t, initial=0.0),
             simpson(delivered, x=t), simpson(power, x=t))
 
 
