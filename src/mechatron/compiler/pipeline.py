@@ -16,7 +16,7 @@ from mechatron.compiler.events import Lowering as EventLowering
 from mechatron.compiler.events import (bind_pre, clock_distances, direct_relations,
                                         prepare_events, replace_pre)
 from mechatron.compiler.flatten import ColumnRows, flatten, stack_columns
-from mechatron.compiler.heap import kept_heap
+from mechatron.compiler.heap import ARENAS_FROM, kept_heap
 from mechatron.compiler.relations import extract_relations
 from mechatron.compiler.structure import lower
 from mechatron.core.component import Component
@@ -40,16 +40,30 @@ def compile_model(model: Component, *, name: str | None = None,
     leave the collector's first pass after the compile to visit all of it.
 
     glibc keeps the memory the compile frees for the compile's own later use, and hands
-    it back when the compile is done (:mod:`mechatron.compiler.heap`).
+    it back when the compile is done; so does Python for its arenas when the model has
+    `ARENAS_FROM` elements or more (:mod:`mechatron.compiler.heap`).
     """
     enabled = gc.isenabled()
     gc.disable()
     try:
-        with kept_heap():
+        with kept_heap(arenas=_at_least(model, ARENAS_FROM)):
             return _compile(model, name, check_dimensions)
     finally:
         if enabled:
             gc.enable()
+
+
+def _at_least(model: Component, count: int) -> bool:
+    """Whether the tree of ``model`` holds ``count`` elements or more (its components and
+    ports), walked only until it does."""
+    seen, stack = 0, [model]
+    while stack:
+        children = stack.pop()._children
+        seen += len(children)
+        if seen >= count:
+            return True
+        stack.extend([c for c in children.values() if isinstance(c, Component)])
+    return False
 
 
 def _external_blocks(model: Component, classes: frozenset) -> list[dict]:
