@@ -2,6 +2,7 @@
 maps no block of its own and trims nothing, and Python's arenas handed back are listed
 and given out again; afterwards what was freed goes back."""
 
+import os
 import subprocess
 import sys
 
@@ -16,7 +17,8 @@ from mechatron.library import electrical as el
 lib = heap._glibc()
 glibc_only = pytest.mark.skipif(lib is None, reason="glibc's malloc with its defaults only")
 helper = heap._arena_helper()
-arenas_only = pytest.mark.skipif(helper is None, reason="CPython and a C compiler only")
+arenas_only = pytest.mark.skipif(helper is None or not os.path.exists("/proc/self/statm"),
+                                 reason="CPython, a C compiler and /proc only")
 
 BIG = 96 << 20          # above glibc's largest dynamic mmap threshold (32 MiB)
 
@@ -183,6 +185,16 @@ def test_a_large_model_keeps_the_arenas_while_it_compiles_and_a_small_one_does_n
     monkeypatch.setattr(pipeline, "ARENAS_FROM", 10)
     mt.compile_model(motor)
     assert keeping == [False, True] and not heap._keeping and counts()["listed"] == 0
+
+
+@arenas_only
+def test_a_large_compile_that_fails_hands_the_arenas_back(monkeypatch):
+    monkeypatch.setattr(pipeline, "ARENAS_FROM", 1)
+    m = mt.System("loose")
+    m.add("r", el.Resistor(R=1.0))              # its pins connected to nothing
+    with pytest.raises(ModelError, match="is not connected"):
+        mt.compile_model(m)
+    assert not heap._keeping and counts()["listed"] == 0 and heap._depth == 0
 
 
 def test_elements_are_counted_until_there_are_enough():
