@@ -83,16 +83,22 @@ def test_the_heap_is_left_alone_when_the_user_says_so(monkeypatch):
     assert heap._glibc() is None, "malloc tuned by the user: their choice stands"
 
 
-@glibc_only
-def test_compile_model_runs_inside_the_block(monkeypatch):
-    depth = []
+def seen_by_compiles(monkeypatch, read) -> list:
+    """What ``read()`` gives inside each compile from now on (a list filled as they run)."""
+    seen = []
     compile_ = pipeline._compile
 
     def spy(*args, **kwargs):
-        depth.append(heap._depth)
+        seen.append(read())
         return compile_(*args, **kwargs)
 
     monkeypatch.setattr(pipeline, "_compile", spy)
+    return seen
+
+
+@glibc_only
+def test_compile_model_runs_inside_the_block(monkeypatch):
+    depth = seen_by_compiles(monkeypatch, lambda: heap._depth)
     mt.compile_model(mt.models.get("dc_motor").build())
     assert depth == [1] and heap._depth == 0
 
@@ -172,14 +178,7 @@ def test_the_allocator_installed_twice_stays_one():
 @arenas_only
 def test_a_large_model_keeps_the_arenas_while_it_compiles_and_a_small_one_does_not(
         monkeypatch):
-    keeping = []
-    compile_ = pipeline._compile
-
-    def spy(*args, **kwargs):
-        keeping.append(heap._keeping)
-        return compile_(*args, **kwargs)
-
-    monkeypatch.setattr(pipeline, "_compile", spy)
+    keeping = seen_by_compiles(monkeypatch, lambda: heap._keeping)
     motor = mt.models.get("dc_motor").build()
     mt.compile_model(motor)
     monkeypatch.setattr(pipeline, "ARENAS_FROM", 10)
