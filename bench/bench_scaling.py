@@ -93,6 +93,7 @@ from scipy.integrate import solve_ivp
 from scipy.sparse import csgraph
 
 import mechatron as mt
+from mechatron.compiler import heap
 from mechatron.library import electrical as el
 from mechatron.library import translational as tr
 
@@ -258,11 +259,17 @@ def compile_once(n: int) -> dict:
     mt.compile_model(rc_ladder(2))
     gc.collect()
     model, t_build = clock(rc_ladder, n)
+    before = heap.arena_counts() or {}
     (cm, t_compile), took = _cpu_of(clock, mt.compile_model, model)
+    after = heap.arena_counts() or {}
     cpu = took.pop("cpu_s")
     rep = cm.report
     flat = (rep.get("equations") or {}).get("flat") or 0
+    # Python's arenas (compiler/heap.py): asked for by the compile, and taken again from
+    # those it handed back (none where the compile does not keep them)
+    arenas = {k: after.get(k, 0) - before.get(k, 0) for k in ("asked", "reused")}
     return {"N": n, "build_s": t_build, "compile_s": t_compile, "compile_cpu_s": cpu,
+            "arenas_asked": arenas["asked"], "arenas_reused": arenas["reused"],
             "passes_s": dict(rep.get("timings", {})),
             "passes_cpu_s": dict(rep.get("cpu_timings", {})), "equations_flat": flat,
             "states": len(cm.state_names),
@@ -436,7 +443,8 @@ def compile_scaling(sizes: list[int], fresh: bool = True) -> dict:
         else:
             row = compile_once(n)
         log(f"rc_ladder N={n} compile alone: cpu {row['compile_cpu_s']:.3f} s "
-            f"(system {row['system_s']:.3f} s, {row['minor_page_faults']} page faults), "
+            f"(system {row['system_s']:.3f} s, {row['minor_page_faults']} page faults, "
+            f"{row['arenas_reused']} of {row['arenas_asked']} arenas reused), "
             f"{row['us_per_equation']:.1f} us/equation, peak {row['peak_rss_MB']:.0f} MB")
         rows.append(row)
     first = rows[0]["us_per_equation"] if rows else None
@@ -540,6 +548,8 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
                       "system_us_per_equation": split[n]["system"],
                       "page_faults_per_equation": [
                           r["minor_page_faults"] / r["equations_flat"] for r in runs[n]],
+                      "arenas_reused_of_asked": [
+                          (r["arenas_reused"], r["arenas_asked"]) for r in runs[n]],
                       # each run's passes, us per flat equation
                       "passes_us_per_equation": [
                           {k: 1e6 * t / r["equations_flat"]
