@@ -316,3 +316,35 @@ def test_a_compiled_model_with_an_fmu_block_is_saved_and_loaded(fmus, tmp_path):
     a = mt.simulate(cm, 0.01, solver="rk4", dt=DT)
     b = mt.simulate(again, 0.01, solver="rk4", dt=DT)
     np.testing.assert_array_equal(a["plant.w"], b["plant.w"])
+
+
+
+@pytest.mark.parametrize("host", ["rosenbrock", "rk45"])
+def test_an_edge_on_an_output_time_inside_a_communication_step_is_logged_after_it(fmus,
+                                                                                  host):
+    """The reference speed pulses on at an output time inside a communication interval
+    (an edge located as an event): every host logs the loop after the edge there, as
+    the compiled Rodas4 host does and as `simulate` does without an FMU."""
+    t_out = np.linspace(0.0, 0.02, 81)
+    t_edge = float(t_out[50])                   # inside [0.012, 0.013]
+
+    def model():
+        m = mt.System("loop")
+        ref = m.add("ref", blocks.Pulse(delay=t_edge, period=0.004, width=0.5,
+                                        amplitude=100.0))
+        err = m.add("err", blocks.Add(k1=1.0, k2=-1.0))
+        ctrl = m.add("pid", blocks.Gain(k=0.05))
+        load = m.add("load", blocks.Constant(value=0.0))
+        plant = m.add("plant", mt.FMUComponent(fmus["cs2"], Ts=TS, outputs=["w"]))
+        m.connect(ref.y, err.u1)
+        m.connect(plant.w, err.u2)
+        m.connect(err.y, ctrl.u)
+        m.connect(ctrl.y, plant.V)
+        m.connect(load.y, plant.tau_load)
+        return m
+
+    ref = mt.simulate(model(), 0.02, solver="rodas4", t_out=t_out, rtol=1e-10, atol=1e-10)
+    res = mt.simulate(model(), 0.02, solver=host, t_out=t_out, rtol=1e-10, atol=1e-10)
+    assert ref["ref.y"][49] == 0.0 and ref["ref.y"][50] == 100.0
+    assert res["ref.y"][50] == 100.0
+    np.testing.assert_allclose(res["pid.y"], ref["pid.y"], rtol=1e-6, atol=1e-9)
