@@ -177,19 +177,18 @@ def test_template_instances_take_their_variables_by_row():
 
 
 @pytest.mark.parametrize("build", [lambda: ladder(30), nested_model, reading_model])
-def test_rows_and_numbers_kept_by_flattening_are_the_records_integers(build):
+def test_rows_and_numbers_kept_by_flattening_are_shared_integers(build):
     """The rows and variable numbers that flattening keeps per instance and per equation
-    (a template instance's variable slots, its equations' alias hints and rows) are the
-    integer objects of the variables' records, not one object of their own each; and
-    each hint still names the variables its equation relates."""
+    (a template instance's variable slots, its equations' alias hints and rows) are
+    shared integer objects (those `_bind_symbols` made once), not one object of their
+    own each; and each hint still names the variables its equation relates."""
     flat = fl.flatten(build())
-    records = list(flat.variables.values())
-    row_object = {v.row: v.row for v in records if isinstance(v, fl._ColumnVariable)}
     number = flat.variable_rows()
     named_by = {number[n]: n for n in flat.variables}    # a hint's number -> the name
+    row_object: dict[int, int] = {}     # each number -> the first object met for it
 
     def shared(x) -> bool:
-        return x not in row_object or row_object[x] is x or -5 <= x <= 256   # cached
+        return row_object.setdefault(x, x) is x or -5 <= x <= 256   # small ints: cached
 
     numbers = 0
     for eq in flat.equations:

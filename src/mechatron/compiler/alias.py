@@ -26,8 +26,8 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.flatten import (ColumnRows, FlatEquation, FlatModel, Origins,
-                                       _TemplateEquation, _gather, stack_columns,
-                                       stack_residuals)
+                                       _TemplateEquation, _gather, column_of,
+                                       stack_columns, stack_residuals)
 from mechatron.errors import InitializationError
 
 __all__ = ["AliasResult", "eliminate_aliases"]
@@ -335,16 +335,19 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     # take few distinct values, one code per combination
     table: dict = {}
 
-    def code(v) -> int:
-        key = (v.start is not None, v.priority, v.kind)
+    def code(start, priority, kind) -> int:
+        key = (start is not None, priority, kind)
         c = table.get(key)
         if c is None:
             c = table[key] = len(table)
         return c
 
     # (one key at a time, not a list of a tuple per variable: the tuples are freed as
-    # they are read)
-    codes = np.fromiter(map(code, flat.variables.values()), dtype=np.intp, count=n)
+    # they are read; each attribute read off the class plans, no record formed)
+    variables = flat.variables
+    codes = np.fromiter(map(code, column_of(variables, "start"),
+                            column_of(variables, "priority"), column_of(variables, "kind")),
+                        dtype=np.intp, count=n)
     has_start = np.array([key[0] for key in table], dtype=bool)[codes]
     rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
                      _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
@@ -394,11 +397,11 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
         groups: dict[int, list] = {}
         for j, c in zip(with_start.tolist(), cls[with_start].tolist()):
             groups.setdefault(c, []).append(j)
-        records = _records(flat)
+        record = _record_at(flat)
         for c, members in groups.items():
             b = int(best_of[c])
             _merge_starts(result, flat, names[b],
-                          [(names[j], float(f[j] / f[b]), records[j]) for j in members])
+                          [(names[j], float(f[j] / f[b]), record(j)) for j in members])
     return gone
 
 
@@ -507,10 +510,11 @@ def _rank(var, differentiated: bool):
             -len(var.name))
 
 
-def _records(flat: FlatModel) -> list:
-    """The variables' records by row (their declaration order), without reading a name."""
+def _record_at(flat: FlatModel):
+    """A function of a row that gives the record of the variable there (in declaration
+    order), without reading a name or forming the others (`_Variables.at`)."""
     variables = flat.variables
-    return variables.records() if hasattr(variables, "records") else list(variables.values())
+    return variables.at if hasattr(variables, "at") else list(variables.values()).__getitem__
 
 
 def _merge_starts(result: AliasResult, flat: FlatModel, rep: str, members) -> None:

@@ -55,7 +55,7 @@ import casadi as ca
 
 from mechatron.compiler.flatten import (FlatModel, _bind_symbols, _collect_equations,
                                         _SumEquation, _TemplateEquation, _walk,
-                                        stack_columns, stack_residuals)
+                                        column_of, stack_columns, stack_residuals)
 from mechatron.core.component import Component
 from mechatron.core.context import BuildContext
 from mechatron.core.events import Clock
@@ -364,15 +364,19 @@ class _Symbols:
         self.declared: dict[int, str] = {}
         physical = flat.physical_owners
         # one dimension per distinct unit, mapped over the variables in C
-        variables = list(flat.variables.values())
-        units = [v.unit for v in variables]
+        # each attribute read off the class plans (no record formed: `column_of`)
+        units = column_of(flat.variables, "unit")
         dim_of = {u: self._dim(u) for u in dict.fromkeys(units)}
         dims = list(map(dim_of.__getitem__, units))
+        kinds = owners = None
         for u, d in dim_of.items():
             if d != ONE:
                 continue
+            if kinds is None:
+                kinds = column_of(flat.variables, "kind")
+                owners = column_of(flat.variables, "owner")
             for k in [k for k, unit in enumerate(units) if unit == u]:
-                if _free_signal(variables[k], physical):
+                if _free_signal(kinds[k], owners[k], physical):
                     dims[k] = FREE
         self.dims = dims
         # the variables' column is stacked once per model (shared with other passes)
@@ -411,15 +415,17 @@ class _Symbols:
         v = flat.variables.get(name)
         if v is not None:           # not met: the variables are the walk's input
             d = self._dim(v.unit)
-            return FREE if d == ONE and _free_signal(v, flat.physical_owners) else d
+            return FREE if d == ONE and _free_signal(v.kind, v.owner, flat.physical_owners) \
+                else d
         return FREE
 
 
-def _free_signal(v, physical) -> bool:
-    """Whether a dimensionless variable ``v`` is a free signal: a signal input or output,
-    or a variable of a component without physical ports (``physical``)."""
-    return v.kind == "input" or v.kind == "output" or \
-        (v.kind == "variable" and v.owner not in physical)
+def _free_signal(kind: str, owner: str, physical) -> bool:
+    """Whether a dimensionless variable of ``kind`` whose component is ``owner`` is a
+    free signal: a signal input or output, or a variable of a component without
+    physical ports (``physical``)."""
+    return kind == "input" or kind == "output" or \
+        (kind == "variable" and owner not in physical)
 
 
 def _der(d):

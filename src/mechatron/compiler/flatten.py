@@ -13,7 +13,7 @@ from collections.abc import (ItemsView, Mapping, MutableMapping, MutableSequence
                              ValuesView)
 from dataclasses import dataclass, field
 from itertools import chain, repeat
-from operator import attrgetter
+from operator import attrgetter, itemgetter
 
 import casadi as ca
 import numpy as np
@@ -236,63 +236,136 @@ class ColumnRows(MutableSequence):
 
 class _Variables(MutableMapping):
     """`FlatModel.variables`: name -> record, in declaration order, held as two lists
-    (the names, the records). The dictionary by name is built on the first read by name;
-    iterating, counting and reading the records in order never build it. A compile reads
-    its variables by row (`_first_row`, template slots, alias numbers), so a model bound
-    in bulk is compiled without entering every name in a dictionary: at 10^6 variables,
-    40 MB and a lookup's cache misses per name. Replacing or deleting a name already
-    there finds its place by a search (rare: flattening only appends)."""
+    (the names, the records). The dictionary by name (name -> place) is built on the
+    first read by name; iterating, counting and reading the records in order never build
+    it. A compile reads its variables by row (`_first_row`, template slots, alias
+    numbers), so a model bound in bulk is compiled without entering every name in a
+    dictionary: at 10^6 variables, 40 MB and a lookup's cache misses per name. Replacing
+    or deleting a name already there finds its place by a search (rare: flattening only
+    appends).
 
-    __slots__ = ("_names", "_records", "_index")
+    Variables bound in bulk (`extend_bulk`) have no record until one is read (`at`, by
+    name, or all of them by `records`, `values`, `items`): what a record reads is held
+    by the class's plan entry, shared by every instance, and a pass that reads one
+    attribute of every variable takes it from there (`column_of`). A million records are
+    some 130 MB that most compiles never read one by one."""
+
+    __slots__ = ("_names", "_records", "_index", "_bulk", "_formed")
 
     def __init__(self, items=()):
         self._names: list[str] = []
         self._records: list = []
         self._index: dict | None = None
+        # the first len(plans) variables, bound in bulk: their column, each one's plan
+        # entry and owner's path; None once every record is formed
+        self._bulk: tuple[ca.SX, list, list] | None = None
+        self._formed: list[int] = []       # the places of bulk records formed since
         self.update(items)
 
     def extend(self, names: list[str], records: list) -> None:
         """Append the new ``names`` with their ``records``; the lists are taken as they
-        are when there is nothing yet (`_bind_symbols`)."""
+        are when there is nothing yet."""
         if not self._names and self._index is None:
             self._names, self._records = names, records
             return
         for name, record in zip(names, records):
             self[name] = record
 
+    def extend_bulk(self, names: list[str], column: ca.SX, plans: list,
+                    owners: list) -> None:
+        """Append ``names``, the variables of rows 0, 1, ... of ``column`` (`_bind_symbols`),
+        each read as a `_ColumnVariable` of its ``plans`` entry and owner's path
+        (``owners``); their records are formed when read, if there is nothing yet,
+        else now. The lists are taken as they are."""
+        if self._names or self._index is not None:
+            self.extend(names, list(map(_ColumnVariable, names, repeat(column),
+                                        range(len(names)), plans, owners)))
+            return
+        self._names, self._records = names, [None] * len(names)
+        self._bulk = (column, plans, owners)
+
+    def at(self, k: int):
+        """The record of the variable in place ``k`` (its row in declaration order)."""
+        record = self._records[k]
+        if record is None:
+            column, plans, owners = self._bulk
+            record = self._records[k] = _ColumnVariable(self._names[k], column, k,
+                                                        plans[k], owners[k])
+            self._formed.append(k)
+        return record
+
     def records(self) -> list:
-        """The records in declaration order (by row): the list held, not a copy."""
+        """The records in declaration order (by row): the list held, not a copy, every
+        record formed."""
+        if self._bulk is not None:
+            at = self.at
+            for k in range(len(self._bulk[1])):
+                at(k)
+            self._bulk, self._formed = None, []
         return self._records
+
+    def column_of(self, attribute: str) -> list:
+        """Each variable's ``attribute`` (``name``, ``owner``, or what the class's plan
+        entry holds: ``kind``, ``unit``, ``doc``, ``start``, ``priority``, ``hint``,
+        ``state_select``), in order, as its record reads it: read off the plan entries
+        for the variables bound in bulk whose record is not formed, so no record is."""
+        if attribute == "name":
+            return list(self._names)
+        if self._bulk is None:
+            return list(map(attrgetter(attribute), self._records))
+        _, plans, owners = self._bulk
+        if attribute == "owner":
+            out = list(owners)
+        else:
+            out = list(map(itemgetter(_PLAN_PLACE[attribute]), plans))
+        records = self._records
+        out += map(attrgetter(attribute), records[len(out):])
+        for k in self._formed:      # a start or priority given to the instance
+            out[k] = getattr(records[k], attribute)
+        return out
+
+    def symbol_sources(self):
+        """Each variable's symbol in order, as `_gather` takes it: ``(column, row)`` of
+        a record that still reads it from its column, else ``(None, symbol)``."""
+        if self._bulk is not None:
+            column = self._bulk[0]
+            return ((column, k) if r is None else _symbol_source(r)
+                    for k, r in enumerate(self._records))
+        return map(_symbol_source, self._records)
 
     def _by_name(self) -> dict:
         index = self._index
         if index is None:
-            index = self._index = dict(zip(self._names, self._records))
+            index = self._index = dict(zip(self._names, range(len(self._names))))
         return index
 
     def __getitem__(self, name):
-        return self._by_name()[name]
+        return self.at(self._by_name()[name])
 
     def get(self, name, default=None):
-        return self._by_name().get(name, default)
+        k = self._by_name().get(name)
+        return default if k is None else self.at(k)
 
     def __contains__(self, name) -> bool:
         return name in self._by_name()
 
     def __setitem__(self, name, record) -> None:
         index = self._by_name()
-        if name in index:
-            self._records[self._names.index(name)] = record
-        else:
+        k = index.get(name)
+        if k is None:
+            index[name] = len(self._names)
             self._names.append(name)
             self._records.append(record)
-        index[name] = record
+        else:
+            self.at(k)      # noted as formed: `column_of` reads the record given
+            self._records[k] = record
 
     def __delitem__(self, name) -> None:
-        del self._by_name()[name]
-        k = self._names.index(name)
+        k = self._by_name()[name]
+        self.records()          # the places after it move
         del self._names[k]
         del self._records[k]
+        self._index = None
 
     def __iter__(self):
         return iter(self._names)
@@ -307,21 +380,40 @@ class _Variables(MutableMapping):
         return _NamedRecordsView(self)
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}({dict(zip(self._names, self._records))!r})"
+        return f"{type(self).__name__}({dict(zip(self._names, self.records()))!r})"
+
+
+#: where a `_ColumnVariable`'s attributes are in its class's plan entry
+#: (`_declaration_plan`)
+_PLAN_PLACE = {"kind": 1, "unit": 2, "doc": 3, "start": 4, "priority": 5, "hint": 6,
+               "state_select": 7}
+
+
+def column_of(variables, attribute: str) -> list:
+    """Each of ``variables``' (`FlatModel.variables`) ``attribute`` in order, without
+    forming the records of variables bound in bulk (`_Variables.column_of`)."""
+    if type(variables) is _Variables:
+        return variables.column_of(attribute)
+    return [getattr(v, attribute) for v in variables.values()]
+
+
+def _symbol_source(v) -> tuple:
+    return (v.column, v.row) if type(v) is _ColumnVariable and v._sym is None \
+        else (None, v.sym)
 
 
 class _RecordsView(ValuesView):
     """The records in order, read off their list (no lookup by name)."""
 
     def __iter__(self):
-        return iter(self._mapping._records)
+        return iter(self._mapping.records())
 
 
 class _NamedRecordsView(ItemsView):
     """``(name, record)`` in order, read off the two lists."""
 
     def __iter__(self):
-        return zip(self._mapping._names, self._mapping._records)
+        return zip(self._mapping._names, self._mapping.records())
 
 
 class _RowsOf:
@@ -745,7 +837,7 @@ class FlatModel:
         cache = self.__dict__.get("_variable_stack")
         if cache is None or cache[0] != len(self.variables):
             index = {n: k for k, n in enumerate(self.variables)}
-            column = _gathered(self.variables.values()) if index else ca.SX(0, 1)
+            column = _gathered(self.variables) if index else ca.SX(0, 1)
             cache = self.__dict__["_variable_stack"] = (len(index), column, index)
         return cache[1], cache[2]
 
@@ -779,8 +871,9 @@ class FlatModel:
     @functools.cached_property
     def physical_owners(self) -> frozenset:
         """Paths of the components that have physical (conserving) ports."""
-        return frozenset(v.owner for v in self.variables.values()
-                         if v.kind == "across" or v.kind == "through")
+        return frozenset(owner for owner, kind in zip(column_of(self.variables, "owner"),
+                                                      column_of(self.variables, "kind"))
+                         if kind == "across" or kind == "through")
 
 
 def _walk(root: Element):
@@ -969,12 +1062,13 @@ def _summary(name: str, problems: list[str]) -> str:
     return f"model '{name}': {len(problems)} problems:\n  " + "\n  ".join(problems)
 
 
-def _gathered(records) -> ca.SX:
-    """``vertcat`` of the symbols of ``records``: those still in a column
-    (`_ColumnVariable`) gathered from it by one index, the others stacked."""
-    return _gather((v.column, v.row)
-                   if type(v) is _ColumnVariable and v._sym is None
-                   else (None, v.sym) for v in records)
+def _gathered(variables) -> ca.SX:
+    """``vertcat`` of the symbols of ``variables`` (`FlatModel.variables`): those still
+    in a column (`_ColumnVariable`, or bound in bulk and not formed) gathered from it by
+    one index, the others stacked."""
+    if type(variables) is _Variables:
+        return _gather(variables.symbol_sources())
+    return _gather(map(_symbol_source, variables.values()))
 
 
 class _ColumnSyms(dict):
@@ -1070,15 +1164,18 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     # variable rows, alias hints, equation rows) refers to these instead of holding an
     # integer object of its own (32 bytes each; see `_Template.add`)
     ints = list(range(len(var_names)))
-    records = list(map(_ColumnVariable, var_names, repeat(var_column), ints, var_plain,
-                       var_owner))
     base = len(variables)            # variables bound before (none in flatten)
     if not base:
         flat.__dict__["_ints"] = ints
     if type(variables) is _Variables:
-        variables.extend(var_names, records)
+        # each record formed when read (`_ColumnVariable`: one per variable)
+        variables.extend_bulk(var_names, var_column, var_plain, var_owner)
+        record_at, first = variables.at, base
     else:
+        records = list(map(_ColumnVariable, var_names, repeat(var_column), ints,
+                           var_plain, var_owner))
         variables.update(zip(var_names, records))
+        record_at, first = records.__getitem__, 0
     pi = vi = 0
     for el, params, plain, offsets in bound:
         if params:
@@ -1130,7 +1227,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 for j, (key, _, unit, *_) in enumerate(plain):
                     given = starts.get(key)
                     if isinstance(given, Start):
-                        record = records[vi + j]
+                        record = record_at(first + vi + j)
                         try:
                             record.start = to_si(given.value, unit, record.name)
                         except UnitError as exc:

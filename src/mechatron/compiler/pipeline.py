@@ -15,7 +15,7 @@ from mechatron.compiler.dimensions import check_dimensions as _check_dimensions
 from mechatron.compiler.events import Lowering as EventLowering
 from mechatron.compiler.events import (bind_pre, clock_distances, direct_relations,
                                         prepare_events, replace_pre)
-from mechatron.compiler.flatten import ColumnRows, flatten, stack_columns
+from mechatron.compiler.flatten import ColumnRows, column_of, flatten, stack_columns
 from mechatron.compiler.heap import ARENAS_FROM, kept_heap
 from mechatron.compiler.relations import extract_relations
 from mechatron.compiler.structure import lower
@@ -130,8 +130,8 @@ def _logged(flat, alias, values: ca.SX) -> tuple[list, list, list, ca.SX]:
     variables = flat.variables
     n = len(variables)
     names = list(variables)
-    units = [v.unit for v in variables.values()]
-    docs = [v.doc for v in variables.values()]
+    units = column_of(variables, "unit")
+    docs = column_of(variables, "doc")
     if alias.representative is not None:
         rep, scale = alias.representative, alias.scale
     else:
@@ -495,7 +495,7 @@ def _state_preference(flat, alias) -> dict[str, float]:
     its alias class, plus one half for a high-priority start value (the coordinates a
     user fixes initially are the ones to integrate). Only nonzero entries."""
     pref: dict[str, float] = {}
-    selects = [v.state_select for v in flat.variables.values()]
+    selects = column_of(flat.variables, "state_select")
     if any(_STATE_SELECT.get(s, 0.0) for s in set(selects)):   # else nothing to read
         for n, select in zip(flat.variables, selects):
             level = _STATE_SELECT.get(select, 0.0)
