@@ -296,6 +296,76 @@ def test_the_variables_read_as_a_dictionary_in_declaration_order():
         assert list(more) == list(want) + ["y.v"] and more["y.v"] is new
 
 
+
+def _bulk_variables(n: int = 6):
+    """`_Variables` bound in bulk as `_bind_symbols` binds them: a column of symbols,
+    each variable's plan entry (shared by the instances of a class) and owner."""
+    names = [f"c{k // 2}.{'v' if k % 2 == 0 else 'i'}" for k in range(n)]
+    column = ca.SX.sym("x", n)
+    plans = [("v", "across", "V", "voltage", 0.0, "low", "try v", "prefer"),
+             ("i", "through", "A", "current", None, "low", "try i", "default")]
+    got = fl._Variables()
+    got.extend_bulk(names, column, [plans[k % 2] for k in range(n)],
+                    [f"c{k // 2}" for k in range(n)])
+    return got, names, column
+
+
+ATTRIBUTES = ("name", "owner", "kind", "unit", "doc", "start", "priority", "hint",
+              "state_select")
+
+
+def test_variables_bound_in_bulk_form_a_record_only_when_one_is_read():
+    """A variable bound in bulk has no record until it is read; read by place or by
+    name it is formed once (the same object after), reads as the class plan says, and
+    `column_of` gives what the records would give, before any is formed, with some
+    changed, and with all formed."""
+    got, names, column = _bulk_variables()
+    columns = {a: fl.column_of(got, a) for a in ATTRIBUTES}
+    assert got._records == [None] * 6                  # nothing formed by reading those
+    first = got.at(2)
+    assert got.at(2) is first and got["c1.v"] is first and got.get("c1.v") is first
+    assert (first.name, first.row, first.owner, first.kind, first.unit) == \
+        ("c1.v", 2, "c1", "across", "V")
+    assert ca.is_equal(first.sym, column[2])
+    first.start, first.priority = 1.5, "high"          # a start given to the instance
+    columns["start"][2], columns["priority"][2] = 1.5, "high"
+    assert {a: fl.column_of(got, a) for a in ATTRIBUTES} == columns
+    assert sum(r is not None for r in got._records) == 1
+    # stacked from the column without forming the rest
+    gathered = fl._gathered(got)
+    assert all(ca.is_equal(gathered[k], column[k]) for k in range(6))
+    assert sum(r is not None for r in got._records) == 1
+    records = list(got.values())                        # all formed, in order
+    assert [r.name for r in records] == names and records[2] is first
+    assert {a: [getattr(r, a) for r in records] for a in ATTRIBUTES} == columns
+    assert {a: fl.column_of(got, a) for a in ATTRIBUTES} == columns
+
+
+def test_variables_bound_in_bulk_read_and_change_as_the_dictionary_of_their_records():
+    """Replaced, appended, deleted, and bound in bulk after others: the same as the
+    dictionary of the records formed one by one."""
+    got, names, column = _bulk_variables()
+    want = dict(zip(names, [got.at(k) for k in range(6)]))
+    got, _, _ = _bulk_variables()
+    other = fl._Variables()
+    other.update(want)
+    got["c1.i"] = want["c1.i"] = other["c1.i"] = object()     # replaced in place
+    assert fl.column_of(got, "name") == names
+    got["x.v"] = want["x.v"] = want["c0.v"]                    # appended
+    assert [type(r).__name__ for r in got.values()][:3] == ["_ColumnVariable"] * 3
+    assert [r.name if hasattr(r, "name") else r for r in got.values()] == \
+        [r.name if hasattr(r, "name") else r for r in want.values()]
+    del got["c0.i"], want["c0.i"]
+    assert list(got) == list(want) and [got[n].row if hasattr(got[n], "row") else None
+                                        for n in got] == \
+        [want[n].row if hasattr(want[n], "row") else None for n in want]
+    assert "c0.i" not in got and got.get("c0.i") is None
+    # bound in bulk after others: formed at once, each reading its own column's row
+    later = fl._Variables([("a.v", want["c0.v"])])
+    later.extend_bulk(["b.v", "b.i"], column[:2], [("v",) * 8, ("i",) * 8], ["b", "b"])
+    assert later._records[1].row == 0 and later._records[2].row == 1
+    assert list(later) == ["a.v", "b.v", "b.i"] and later["b.i"].owner == "b"
+
 def spring_chain(n: int = 8):
     """Masses on springs and dampers in parallel from a fixed reference, the last
     spring stretched at the start (a start value with priority)."""
@@ -334,6 +404,41 @@ def test_a_compile_of_instances_bound_in_bulk_reads_no_variable_by_name(build, m
     assert got.state_names == want.state_names and got.alg_names == want.alg_names
     assert got.names == want.names and got.units == want.units
 
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(12), spring_chain])
+def test_a_compile_of_instances_bound_in_bulk_forms_no_record_it_does_not_need(
+        build, monkeypatch):
+    """Every pass reads what the variables' classes declare off the class plans
+    (`column_of`): a compile forms the records of the variables with a start value
+    alone (alias elimination merges them: the springs' elongations; none in the
+    ladder), and the model is the one compiled from records formed beforehand."""
+    import mechatron.compiler.pipeline as pipeline
+
+    flats = []
+    flatten = pipeline.flatten
+
+    def kept(*args, **kwargs):
+        flats.append(flatten(*args, **kwargs))
+        return flats[-1]
+
+    def formed_first(*args, **kwargs):
+        flat = flatten(*args, **kwargs)
+        flat.variables.records()
+        return flat
+
+    monkeypatch.setattr(pipeline, "flatten", formed_first)
+    want = mt.compile_model(build())
+    monkeypatch.setattr(pipeline, "flatten", kept)
+    got = mt.compile_model(build())
+    variables = flats[0].variables
+    formed = [n for n, r in zip(variables, variables._records) if r is not None]
+    starts = fl.column_of(variables, "start")
+    assert formed == [n for n, start in zip(variables, starts) if start is not None]
+    assert got.state_names == want.state_names and got.alg_names == want.alg_names
+    assert got.names == want.names and got.units == want.units
+    a, b = mt.simulate(want, 0.01, log="all"), mt.simulate(got, 0.01, log="all")
+    assert all(np.array_equal(a[n], b[n]) for n in want.names)
 
 def _parts(kind):
     a, b = ca.SX.sym("a", 5), ca.SX.sym("b", 3)

@@ -346,8 +346,8 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     # they are read; each attribute read off the class plans, no record formed)
     variables = flat.variables
     codes = np.fromiter(map(code, column_of(variables, "start"),
-                            column_of(variables, "priority"), column_of(variables, "kind")),
-                        dtype=np.intp, count=n)
+                            column_of(variables, "priority"),
+                            column_of(variables, "kind")), dtype=np.intp, count=n)
     has_start = np.array([key[0] for key in table], dtype=bool)[codes]
     rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
                      _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
@@ -514,7 +514,9 @@ def _record_at(flat: FlatModel):
     """A function of a row that gives the record of the variable there (in declaration
     order), without reading a name or forming the others (`_Variables.at`)."""
     variables = flat.variables
-    return variables.at if hasattr(variables, "at") else list(variables.values()).__getitem__
+    if hasattr(variables, "at"):
+        return variables.at
+    return list(variables.values()).__getitem__
 
 
 def _merge_starts(result: AliasResult, flat: FlatModel, rep: str, members) -> None:

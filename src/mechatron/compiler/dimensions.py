@@ -415,8 +415,8 @@ class _Symbols:
         v = flat.variables.get(name)
         if v is not None:           # not met: the variables are the walk's input
             d = self._dim(v.unit)
-            return FREE if d == ONE and _free_signal(v.kind, v.owner, flat.physical_owners) \
-                else d
+            free = d == ONE and _free_signal(v.kind, v.owner, flat.physical_owners)
+            return FREE if free else d
         return FREE
 
 

@@ -273,10 +273,10 @@ class _Variables(MutableMapping):
 
     def extend_bulk(self, names: list[str], column: ca.SX, plans: list,
                     owners: list) -> None:
-        """Append ``names``, the variables of rows 0, 1, ... of ``column`` (`_bind_symbols`),
-        each read as a `_ColumnVariable` of its ``plans`` entry and owner's path
-        (``owners``); their records are formed when read, if there is nothing yet,
-        else now. The lists are taken as they are."""
+        """Append ``names``, the variables of rows 0, 1, ... of ``column``
+        (`_bind_symbols`), each read as a `_ColumnVariable` of its ``plans`` entry and
+        owner's path (``owners``); their records are formed when read if there is
+        nothing yet, else now. The lists are taken as they are."""
         if self._names or self._index is not None:
             self.extend(names, list(map(_ColumnVariable, names, repeat(column),
                                         range(len(names)), plans, owners)))
