@@ -257,9 +257,10 @@ class _Variables(MutableMapping):
         self._records: list = []
         self._index: dict | None = None
         # the first len(plans) variables, bound in bulk: their column, each one's plan
-        # entry and owner's path; None once every record is formed
-        self._bulk: tuple[ca.SX, list, list] | None = None
-        self._formed: list[int] = []       # the places of bulk records formed since
+        # entry, owner's path and row in the column (None: its place); None once every
+        # record is formed. A place among them whose record was given holds no plan.
+        self._bulk: tuple[ca.SX, list, list, list | None] | None = None
+        self._formed: list[int] = []    # the places among them that hold a record
         self.update(items)
 
     def extend(self, names: list[str], records: list) -> None:
@@ -282,15 +283,34 @@ class _Variables(MutableMapping):
                                         range(len(names)), plans, owners)))
             return
         self._names, self._records = names, [None] * len(names)
-        self._bulk = (column, plans, owners)
+        self._bulk = (column, plans, owners, None)
+
+    def reordered(self, places: list[int]) -> _Variables:
+        """The variables in places ``places`` (each once), in that order: those bound
+        in bulk stay unformed (`_declaration_order`)."""
+        new = _Variables()
+        new._names = list(map(self._names.__getitem__, places))
+        new._records = list(map(self._records.__getitem__, places))
+        if self._bulk is not None:
+            column, plans, owners, rows = self._bulk
+            n = len(plans)
+            # every place read as bound in bulk; one whose record was given (bound
+            # after them) holds no plan and is read off its record
+            new._bulk = (column, [plans[p] if p < n else _NO_PLAN for p in places],
+                         [owners[p] if p < n else None for p in places],
+                         [(p if rows is None else rows[p]) if p < n else -1
+                          for p in places])
+            new._formed = [k for k, r in enumerate(new._records) if r is not None]
+        return new
 
     def at(self, k: int):
         """The record of the variable in place ``k`` (its row in declaration order)."""
         record = self._records[k]
         if record is None:
-            column, plans, owners = self._bulk
-            record = self._records[k] = _ColumnVariable(self._names[k], column, k,
-                                                        plans[k], owners[k])
+            column, plans, owners, rows = self._bulk
+            record = self._records[k] = _ColumnVariable(
+                self._names[k], column, k if rows is None else rows[k], plans[k],
+                owners[k])
             self._formed.append(k)
         return record
 
@@ -313,7 +333,7 @@ class _Variables(MutableMapping):
             return list(self._names)
         if self._bulk is None:
             return list(map(attrgetter(attribute), self._records))
-        _, plans, owners = self._bulk
+        _, plans, owners, _ = self._bulk
         if attribute == "owner":
             out = list(owners)
         else:
@@ -328,9 +348,9 @@ class _Variables(MutableMapping):
         """Each variable's symbol in order, as `_gather` takes it: ``(column, row)`` of
         a record that still reads it from its column, else ``(None, symbol)``."""
         if self._bulk is not None:
-            column = self._bulk[0]
-            return ((column, k) if r is None else _symbol_source(r)
-                    for k, r in enumerate(self._records))
+            column, rows = self._bulk[0], self._bulk[3]
+            return ((column, k if rows is None else rows[k]) if r is None
+                    else _symbol_source(r) for k, r in enumerate(self._records))
         return map(_symbol_source, self._records)
 
     def _by_name(self) -> dict:
@@ -387,6 +407,8 @@ class _Variables(MutableMapping):
 #: (`_declaration_plan`)
 _PLAN_PLACE = {"kind": 1, "unit": 2, "doc": 3, "start": 4, "priority": 5, "hint": 6,
                "state_select": 7}
+#: the plan entry of a place whose record was given (`_Variables.reordered`)
+_NO_PLAN = (None,) * 8
 
 
 def column_of(variables, attribute: str) -> list:
@@ -1001,8 +1023,8 @@ def _declaration_order(flat: FlatModel) -> None:
     order.extend(rest[start:])
     variables = flat.variables
     number = dict(zip(variables, range(len(variables))))
-    flat.variables = _Variables()
-    flat.variables.extend(order, [variables[n] for n in order])
+    flat.variables = variables.reordered([number[n] for n in order]) \
+        if type(variables) is _Variables else _Variables([(n, variables[n]) for n in order])
     if type(flat.context.unknowns) is _Unknowns:
         flat.context.unknowns.variables = flat.variables
     flat.__dict__.pop("_variable_stack", None)     # stacked in the old order
