@@ -341,6 +341,23 @@ def test_variables_bound_in_bulk_form_a_record_only_when_one_is_read():
     assert {a: fl.column_of(got, a) for a in ATTRIBUTES} == columns
 
 
+
+def test_variables_put_back_in_declaration_order_stay_unformed_and_read_the_same():
+    """The variables of ports bound on first read go back to where they are declared
+    (`_declaration_order`): the others stay unformed, each reading its class plan and
+    its row in the column, and they read as the records formed from them."""
+    flat = fl.flatten(reading_model())
+    variables = flat.variables
+    given = [n for n, r in zip(variables, variables._records) if r is not None]
+    assert given and len(given) < len(variables) // 4      # the late ports' alone
+    columns = {a: fl.column_of(variables, a) for a in ATTRIBUTES}
+    stacked = flat.stack_variables()
+    assert [r is not None for r in variables._records].count(True) == len(given)
+    records = list(variables.values())
+    assert {a: [getattr(r, a) for r in records] for a in ATTRIBUTES} == columns
+    assert [stacked[k].name() for k in range(stacked.numel())] == list(variables)
+    assert all(ca.is_equal(stacked[k], r.sym) for k, r in enumerate(records))
+
 def test_variables_bound_in_bulk_read_and_change_as_the_dictionary_of_their_records():
     """Replaced, appended, deleted, and bound in bulk after others: the same as the
     dictionary of the records formed one by one."""
