@@ -120,6 +120,21 @@ def test_the_rows_of_class_templates_are_told_narrow_by_their_origins(monkeypatc
     assert not narrow[np.argmax(counts)]           # the reference node's flow sum
 
 
+
+def test_the_incidence_rows_are_the_patterns_and_share_one_integer_per_column():
+    """`_csr`'s rows are the Jacobian pattern's, row by row; a column held by several
+    rows is one integer object in all of them (they live through the structural
+    analysis), also past the small integers Python caches."""
+    x = ca.SX.sym("x", 600)
+    expr = ca.vertcat(*[x[k] * x[(k + 1) % 600] + x[599 - k] for k in range(600)])
+    rows, sp, _ = st._csr(expr, x)
+    ptr, col = sp.get_crs()
+    assert sp == ca.jacobian_sparsity(expr, x)
+    assert rows == [col[a:b] for a, b in zip(ptr, ptr[1:])]
+    first: dict[int, int] = {}
+    assert all(first.setdefault(v, v) is v for row in rows for v in row)
+    assert max(first) > 256 and sum(map(len, rows)) > 2 * len(first)
+
 def test_the_entries_of_a_sub_block_are_casadis():
     rng = np.random.default_rng(6)
     sp = ca.sparsify(ca.DM((rng.random((40, 50)) < 0.2).astype(float))).sparsity()
