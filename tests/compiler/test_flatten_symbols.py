@@ -206,6 +206,11 @@ def test_rows_and_numbers_kept_by_flattening_are_shared_integers(build):
         for args in tpl.instances:
             assert all(shared(a) for a in args if type(a) is int)
     assert numbers
+    # and the rows of the records, formed now, and the places of the names
+    variables = flat.variables
+    assert all(shared(variables.at(k).row) for k in range(len(variables))
+               if isinstance(variables.at(k), fl._ColumnVariable))
+    assert all(shared(k) for k in variables._by_name().values())
 
 
 @pytest.mark.parametrize("build", [lambda: ladder(4), nested_model, reading_model])

@@ -250,7 +250,7 @@ class _Variables(MutableMapping):
     attribute of every variable takes it from there (`column_of`). A million records are
     some 130 MB that most compiles never read one by one."""
 
-    __slots__ = ("_names", "_records", "_index", "_bulk", "_formed")
+    __slots__ = ("_names", "_records", "_index", "_bulk", "_formed", "_ints")
 
     def __init__(self, items=()):
         self._names: list[str] = []
@@ -261,6 +261,9 @@ class _Variables(MutableMapping):
         # record is formed. A place among them whose record was given holds no plan.
         self._bulk: tuple[ca.SX, list, list, list | None] | None = None
         self._formed: list[int] = []    # the places among them that hold a record
+        # the integers 0, 1, ... as shared objects (`_bind_symbols`'), if given: the
+        # places of the dictionary by name and the rows of the records formed
+        self._ints: list[int] | None = None
         self.update(items)
 
     def extend(self, names: list[str], records: list) -> None:
@@ -273,17 +276,20 @@ class _Variables(MutableMapping):
             self[name] = record
 
     def extend_bulk(self, names: list[str], column: ca.SX, plans: list,
-                    owners: list) -> None:
+                    owners: list, ints: list[int] | None = None) -> None:
         """Append ``names``, the variables of rows 0, 1, ... of ``column``
         (`_bind_symbols`), each read as a `_ColumnVariable` of its ``plans`` entry and
         owner's path (``owners``); their records are formed when read if there is
-        nothing yet, else now. The lists are taken as they are."""
+        nothing yet, else now. ``ints``: the integers 0 .. len(names) - 1 as objects to
+        share. The lists are taken as they are."""
+        rows = ints if ints is not None and len(ints) >= len(names) else None
         if self._names or self._index is not None:
             self.extend(names, list(map(_ColumnVariable, names, repeat(column),
-                                        range(len(names)), plans, owners)))
+                                        rows or range(len(names)), plans, owners)))
             return
         self._names, self._records = names, [None] * len(names)
-        self._bulk = (column, plans, owners, None)
+        self._bulk = (column, plans, owners, rows)
+        self._ints = rows
 
     def reordered(self, places: list[int]) -> _Variables:
         """The variables in places ``places`` (each once), in that order: those bound
@@ -301,6 +307,7 @@ class _Variables(MutableMapping):
                          [(p if rows is None else rows[p]) if p < n else -1
                           for p in places])
             new._formed = [k for k, r in enumerate(new._records) if r is not None]
+            new._ints = self._ints
         return new
 
     def at(self, k: int):
@@ -356,7 +363,9 @@ class _Variables(MutableMapping):
     def _by_name(self) -> dict:
         index = self._index
         if index is None:
-            index = self._index = dict(zip(self._names, range(len(self._names))))
+            n, ints = len(self._names), self._ints
+            index = self._index = dict(zip(self._names, ints if ints is not None and
+                                           len(ints) >= n else range(n)))
         return index
 
     def __getitem__(self, name):
@@ -1191,7 +1200,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         flat.__dict__["_ints"] = ints
     if type(variables) is _Variables:
         # each record formed when read (`_ColumnVariable`: one per variable)
-        variables.extend_bulk(var_names, var_column, var_plain, var_owner)
+        variables.extend_bulk(var_names, var_column, var_plain, var_owner, ints)
         record_at, first = variables.at, base
     else:
         records = list(map(_ColumnVariable, var_names, repeat(var_column), ints,
