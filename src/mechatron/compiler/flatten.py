@@ -1032,8 +1032,10 @@ def _declaration_order(flat: FlatModel) -> None:
     order.extend(rest[start:])
     variables = flat.variables
     number = dict(zip(variables, range(len(variables))))
-    flat.variables = variables.reordered([number[n] for n in order]) \
-        if type(variables) is _Variables else _Variables([(n, variables[n]) for n in order])
+    if type(variables) is _Variables:       # those bound in bulk stay unformed
+        flat.variables = variables.reordered([number[n] for n in order])
+    else:
+        flat.variables = _Variables([(n, variables[n]) for n in order])
     if type(flat.context.unknowns) is _Unknowns:
         flat.context.unknowns.variables = flat.variables
     flat.__dict__.pop("_variable_stack", None)     # stacked in the old order
