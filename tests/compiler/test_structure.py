@@ -4,6 +4,7 @@ it to `mechatron.compiler.linear.reveal`, against CasADi's own pattern and Jacob
 
 import casadi as ca
 import numpy as np
+import pytest
 
 import mechatron as mt
 import mechatron.compiler.structure as st
@@ -167,6 +168,44 @@ def test_one_equation_blocks_zeroed_piece_by_piece_give_the_same_functions(monke
     assert cut.alg_names == whole.alg_names
     _same_functions(cut, whole, t=0.7, seed=11, draws=3)
 
+
+
+def test_one_equation_blocks_solved_together_are_the_ones_solved_alone():
+    """`_solve_singles` on a chain of blocks given in a shuffled order (each equation
+    holds its variable and an earlier block's, so the blocks need colours), one block
+    not linear in its variable and two whose coefficients hold each other's: each block it
+    solves is the one-by-one solution `_solve_linear`, in the place it gives; the
+    three others are left out."""
+    n = 40
+    x = ca.SX.sym("x", n)
+    p = ca.SX.sym("p")
+    res = [x[0] - p] + [x[i] - 2 * x[i - 1] + (i % 3) * x[i // 2] - i * p
+                        for i in range(1, n)]
+    res[17] = x[17] * x[17] - x[3]         # not linear in x[17]
+    res[29] = x[29] * x[5] + 1             # linear, by a coefficient holding x[5]...
+    res[5] = x[5] * x[29] - p              # ...and x[5]'s by one holding x[29]
+    order = np.random.default_rng(3).permutation(n).tolist()
+    es = [100 + k for k in order]          # equation numbers as a model's, not 0..n-1
+    eqs = {100 + k: res[k] for k in range(n)}
+    syms = [x[k] for k in range(n)]
+    X, solved, pieces, places = st._solve_singles(
+        [eqs.get(e, ca.SX(0)) for e in range(100 + n)], syms, list(zip(es, order)))
+    at = [places.get(e, -1) for e in range(100 + n)]
+    sols = ca.vertcat(*pieces)
+    assert len(solved) == sols.numel() == n - 3
+    assert {k for k in range(n) if at[100 + k] < 0} == {5, 17, 29}
+    assert set(places) <= set(es)
+    f = ca.Function("f", [x, p], [sols, X])
+    g = ca.Function("g", [x, p], [ca.vertcat(*[st._solve_linear(
+        res[k], x[k], ca.jacobian(res[k], x[k])) for k in range(n)])])
+    point = np.linspace(0.3, 1.7, n)
+    got, stacked = (np.asarray(v).ravel() for v in f(point, 0.7))
+    want = np.asarray(g(point, 0.7)).ravel()
+    for k in range(n):
+        if at[100 + k] >= 0:
+            place = at[100 + k]
+            assert stacked[solved[place]] == point[k]           # its variable
+            assert got[place] == pytest.approx(want[k], rel=1e-14, abs=1e-14)
 
 def _same_functions(a, b, t: float, seed: int, draws: int = 1) -> None:
     """The derivatives and logged variables of the compiled models ``a`` and ``b`` equal
