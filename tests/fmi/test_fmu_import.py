@@ -82,10 +82,12 @@ def fmus(tmp_path_factory):
     return out
 
 
-def loop(plant, *, sampled=True, Kp=0.05, Ki=2.0, w_ref=100.0, tau=0.0):
-    """Speed loop: a PI controller (sampled at TS, or continuous) drives the plant."""
+def loop(plant, *, sampled=True, Kp=0.05, Ki=2.0, w_ref=100.0, tau=0.0, reference=None):
+    """Speed loop: a PI controller (sampled at TS, or continuous) drives the plant to a
+    constant speed ``w_ref``, or to the signal of the block ``reference``."""
     m = mt.System("loop")
-    ref = m.add("ref", blocks.Constant(value=w_ref))
+    ref = m.add("ref", reference if reference is not None else
+                blocks.Constant(value=w_ref))
     err = m.add("err", blocks.Add(k1=1.0, k2=-1.0))
     if sampled:
         ctrl = m.add("pid", blocks.DiscretePID(Ts=TS, Kp=Kp, Ki=Ki))
@@ -329,19 +331,9 @@ def test_an_edge_on_an_output_time_inside_a_communication_step_is_logged_after_i
     t_edge = float(t_out[50])                   # inside [0.012, 0.013]
 
     def model():
-        m = mt.System("loop")
-        ref = m.add("ref", blocks.Pulse(delay=t_edge, period=0.004, width=0.5,
-                                        amplitude=100.0))
-        err = m.add("err", blocks.Add(k1=1.0, k2=-1.0))
-        ctrl = m.add("pid", blocks.Gain(k=0.05))
-        load = m.add("load", blocks.Constant(value=0.0))
-        plant = m.add("plant", mt.FMUComponent(fmus["cs2"], Ts=TS, outputs=["w"]))
-        m.connect(ref.y, err.u1)
-        m.connect(plant.w, err.u2)
-        m.connect(err.y, ctrl.u)
-        m.connect(ctrl.y, plant.V)
-        m.connect(load.y, plant.tau_load)
-        return m
+        return loop(mt.FMUComponent(fmus["cs2"], Ts=TS, outputs=["w"]), sampled=False,
+                    reference=blocks.Pulse(delay=t_edge, period=0.004, width=0.5,
+                                           amplitude=100.0))
 
     ref = mt.simulate(model(), 0.02, solver="rodas4", t_out=t_out, rtol=1e-10, atol=1e-10)
     res = mt.simulate(model(), 0.02, solver=host, t_out=t_out, rtol=1e-10, atol=1e-10)
