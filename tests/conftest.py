@@ -69,3 +69,38 @@ def saved_figures(monkeypatch):
         return save(self, *args, **kwargs)
     monkeypatch.setattr(Figure, "savefig", recording)
     return figures
+
+
+# ------------------------------------------------------------------ logging: left as found
+def _package_loggers() -> list:
+    """The ``mechatron`` logger and every logger below it that exists now."""
+    import logging
+    loggers = logging.Logger.manager.loggerDict
+    return [logging.getLogger("mechatron")] + [
+        logger for name, logger in list(loggers.items())
+        if name.startswith("mechatron.") and isinstance(logger, logging.Logger)]
+
+
+@pytest.fixture(autouse=True)
+def _logging_left_as_found():
+    """Each test leaves the package's loggers (level, handlers, flags), the root logger's
+    level and ``logging.disable`` as it found them. The docs' examples run in this process
+    (tests/test_docs.py), and one of them quiets the ``mechatron`` logger as a user would:
+    left so, it hid the warnings that later tests read with ``caplog``. (The root logger's
+    handlers are pytest's own, added and removed around each phase: not touched.)"""
+    import logging
+    root = logging.getLogger()
+    saved = [(logger, logger.level, logger.disabled, logger.propagate, list(logger.handlers))
+             for logger in _package_loggers()]
+    known = {id(logger) for logger, *_ in saved}
+    root_level, disabled = root.level, logging.root.manager.disable
+    yield
+    for logger, level, off, propagate, handlers in saved:
+        logger.setLevel(level)
+        logger.disabled, logger.propagate, logger.handlers[:] = off, propagate, handlers
+    for logger in _package_loggers():       # made during the test: as a new logger is
+        if id(logger) not in known:
+            logger.setLevel(logging.NOTSET)
+            logger.disabled, logger.propagate, logger.handlers[:] = False, True, []
+    root.setLevel(root_level)
+    logging.disable(disabled)
