@@ -214,6 +214,16 @@ def test_rows_and_numbers_kept_by_flattening_are_shared_integers(build):
 
 
 @pytest.mark.parametrize("build", [lambda: ladder(4), nested_model, reading_model])
+def test_flattening_lets_go_of_what_only_binding_reads(build):
+    """The list of each element's parameter rows and the shared integers' list serve
+    binding and the class templates' instances alone: the flat model keeps neither (at
+    10^5 sections the parameter rows held 12-25 MB of the compile's peak)."""
+    flat = fl.flatten(build())
+    assert flat.parameters
+    assert not {"_ints", "_parameter_rows"} & set(flat.__dict__)
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(4), nested_model, reading_model])
 def test_parameters_are_read_from_their_column(build):
     """A parameter bound in bulk holds its row in the column of all parameters: its
     symbol, read alone, is that row, named by its path; the stacked parameters are that

@@ -1001,6 +1001,9 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
             el._syms = None
             el._path_cache = None
     flat.__dict__.pop("_ints", None)     # its integers live on where they are held
+    # each element's parameter rows: read by binding and by the class templates' instances
+    # (`_Template.add`), by nothing after (a list per element with parameters)
+    flat.__dict__.pop("_parameter_rows", None)
     if problems:
         raise problems.error_class()(_summary(name, problems), problems=list(problems),
                                      path=name)
