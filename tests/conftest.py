@@ -71,7 +71,7 @@ def saved_figures(monkeypatch):
     return figures
 
 
-# ------------------------------------------------------------------ logging: left as found
+# ---------------------------------------------------------------- logging: left as found
 def _package_loggers() -> list:
     """The ``mechatron`` logger and every logger below it that exists now."""
     import logging
@@ -90,15 +90,15 @@ def _logging_left_as_found():
     handlers are pytest's own, added and removed around each phase: not touched.)"""
     import logging
     root = logging.getLogger()
-    saved = [(logger, logger.level, logger.disabled, logger.propagate, list(logger.handlers))
-             for logger in _package_loggers()]
+    saved = [(logger, logger.level, logger.disabled, logger.propagate,
+              list(logger.handlers)) for logger in _package_loggers()]
     known = {id(logger) for logger, *_ in saved}
     root_level, disabled = root.level, logging.root.manager.disable
     yield
     for logger, level, off, propagate, handlers in saved:
         logger.setLevel(level)
         logger.disabled, logger.propagate, logger.handlers[:] = off, propagate, handlers
-    for logger in _package_loggers():       # made during the test: as a new logger is
+    for logger in _package_loggers():       # made during the test: as new again
         if id(logger) not in known:
             logger.setLevel(logging.NOTSET)
             logger.disabled, logger.propagate, logger.handlers[:] = False, True, []

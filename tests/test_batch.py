@@ -45,7 +45,7 @@ def test_a_sweep_on_the_cluster_equals_the_local_run_and_the_physics(client, cm)
     opts = dict(outputs=["c.v", "r.i"], t_out=np.linspace(0.0, 0.05, 51), rtol=1e-9,
                 atol=1e-12)
     local = batch.sweep(cm, params, 0.05, workers=1, **opts)
-    before = client.run(batch.received)     # (other tests of the module share the cluster)
+    before = client.run(batch.received)     # (the module's tests share the cluster)
     remote = batch.sweep(cm, params, 0.05, client=client, block_size=2, **opts)
     assert len(remote) == len(params)
     for a, b, p in zip(local, remote, params):

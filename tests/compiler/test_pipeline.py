@@ -29,7 +29,7 @@ def test_a_compile_leaves_no_reference_cycles(name):
     mt.compile_model(build())       # a first compile imports modules (their classes
     model = build()                 # are cycles of their own), this one is measured
     while gc.collect():             # earlier tests' garbage, all of it: freeing some
-        pass                        # (a figure's callbacks) can leave more for a next pass
+        pass                        # (a figure's callbacks) leaves more for a next pass
     enabled = gc.isenabled()
     gc.disable()
     try:
