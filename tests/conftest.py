@@ -104,3 +104,24 @@ def _logging_left_as_found():
             logger.disabled, logger.propagate, logger.handlers[:] = False, True, []
     root.setLevel(root_level)
     logging.disable(disabled)
+
+
+# ------------------------------------------------------------------ test order: reshuffled
+def pytest_addoption(parser):
+    parser.addoption(
+        "--order-seed", type=int, default=None, metavar="SEED",
+        help="run the test modules in an order shuffled by SEED, each module's tests "
+             "reversed: a test that passes only after (or before) another fails")
+
+
+def pytest_collection_modifyitems(config, items):
+    seed = config.getoption("--order-seed")
+    if seed is None:
+        return
+    import random
+    modules: dict = {}
+    for item in items:
+        modules.setdefault(item.nodeid.split("::")[0], []).append(item)
+    order = list(modules)
+    random.Random(seed).shuffle(order)
+    items[:] = [item for module in order for item in reversed(modules[module])]
