@@ -257,9 +257,9 @@ class _Variables(MutableMapping):
         self._records: list = []
         self._index: dict | None = None
         # the first len(plans) variables, bound in bulk: their column, each one's plan
-        # entry, owner's path and row in the column (None: its place); None once every
-        # record is formed. A place among them whose record was given holds no plan.
-        self._bulk: tuple[ca.SX, list, list, list | None] | None = None
+        # entry, owner's path and row in the column; None once every record is formed.
+        # A place among them whose record was given holds no plan.
+        self._bulk: tuple[ca.SX, list, list, list | range] | None = None
         self._formed: list[int] = []    # the places among them that hold a record
         # the integers 0, 1, ... as shared objects (`_bind_symbols`'), if given: the
         # places of the dictionary by name and the rows of the records formed
@@ -282,14 +282,15 @@ class _Variables(MutableMapping):
         owner's path (``owners``); their records are formed when read if there is
         nothing yet, else now. ``ints``: the integers 0 .. len(names) - 1 as objects to
         share. The lists are taken as they are."""
-        rows = ints if ints is not None and len(ints) >= len(names) else None
+        shared = ints if ints is not None and len(ints) >= len(names) else None
+        rows = range(len(names)) if shared is None else shared
         if self._names or self._index is not None:
-            self.extend(names, list(map(_ColumnVariable, names, repeat(column),
-                                        rows or range(len(names)), plans, owners)))
+            self.extend(names, list(map(_ColumnVariable, names, repeat(column), rows,
+                                        plans, owners)))
             return
         self._names, self._records = names, [None] * len(names)
         self._bulk = (column, plans, owners, rows)
-        self._ints = rows
+        self._ints = shared
 
     def reordered(self, places: list[int]) -> _Variables:
         """The variables in places ``places`` (each once), in that order: those bound
@@ -304,8 +305,7 @@ class _Variables(MutableMapping):
             # after them) holds no plan and is read off its record
             new._bulk = (column, [plans[p] if p < n else _NO_PLAN for p in places],
                          [owners[p] if p < n else None for p in places],
-                         [(p if rows is None else rows[p]) if p < n else -1
-                          for p in places])
+                         [rows[p] if p < n else -1 for p in places])
             new._formed = [k for k, r in enumerate(new._records) if r is not None]
             new._ints = self._ints
         return new
@@ -316,8 +316,7 @@ class _Variables(MutableMapping):
         if record is None:
             column, plans, owners, rows = self._bulk
             record = self._records[k] = _ColumnVariable(
-                self._names[k], column, k if rows is None else rows[k], plans[k],
-                owners[k])
+                self._names[k], column, rows[k], plans[k], owners[k])
             self._formed.append(k)
         return record
 
@@ -356,8 +355,8 @@ class _Variables(MutableMapping):
         a record that still reads it from its column, else ``(None, symbol)``."""
         if self._bulk is not None:
             column, rows = self._bulk[0], self._bulk[3]
-            return ((column, k if rows is None else rows[k]) if r is None
-                    else _symbol_source(r) for k, r in enumerate(self._records))
+            return ((column, rows[k]) if r is None else _symbol_source(r)
+                    for k, r in enumerate(self._records))
         return map(_symbol_source, self._records)
 
     def _by_name(self) -> dict:
