@@ -311,7 +311,6 @@ def test_the_variables_read_as_a_dictionary_in_declaration_order():
         assert list(more) == list(want) + ["y.v"] and more["y.v"] is new
 
 
-
 def _bulk_variables(n: int = 6):
     """`_Variables` bound in bulk as `_bind_symbols` binds them: a column of symbols,
     each variable's plan entry (shared by the instances of a class) and owner."""
@@ -356,7 +355,6 @@ def test_variables_bound_in_bulk_form_a_record_only_when_one_is_read():
     assert {a: fl.column_of(got, a) for a in ATTRIBUTES} == columns
 
 
-
 def test_variables_put_back_in_declaration_order_stay_unformed_and_read_the_same():
     """The variables of ports bound on first read go back to where they are declared
     (`_declaration_order`): the others stay unformed, each reading its class plan and
@@ -372,6 +370,7 @@ def test_variables_put_back_in_declaration_order_stay_unformed_and_read_the_same
     assert {a: [getattr(r, a) for r in records] for a in ATTRIBUTES} == columns
     assert [stacked[k].name() for k in range(stacked.numel())] == list(variables)
     assert all(ca.is_equal(stacked[k], r.sym) for k, r in enumerate(records))
+
 
 def test_variables_bound_in_bulk_read_and_change_as_the_dictionary_of_their_records():
     """Replaced, appended, deleted, and bound in bulk after others: the same as the
@@ -397,6 +396,7 @@ def test_variables_bound_in_bulk_read_and_change_as_the_dictionary_of_their_reco
     later.extend_bulk(["b.v", "b.i"], column[:2], [("v",) * 8, ("i",) * 8], ["b", "b"])
     assert later._records[1].row == 0 and later._records[2].row == 1
     assert list(later) == ["a.v", "b.v", "b.i"] and later["b.i"].owner == "b"
+
 
 def spring_chain(n: int = 8):
     """Masses on springs and dampers in parallel from a fixed reference, the last
@@ -437,7 +437,6 @@ def test_a_compile_of_instances_bound_in_bulk_reads_no_variable_by_name(build, m
     assert got.names == want.names and got.units == want.units
 
 
-
 @pytest.mark.parametrize("build", [lambda: ladder(12), spring_chain])
 def test_a_compile_of_instances_bound_in_bulk_forms_no_record_it_does_not_need(
         build, monkeypatch):
@@ -471,6 +470,7 @@ def test_a_compile_of_instances_bound_in_bulk_forms_no_record_it_does_not_need(
     assert got.names == want.names and got.units == want.units
     a, b = mt.simulate(want, 0.01, log="all"), mt.simulate(got, 0.01, log="all")
     assert all(np.array_equal(a[n], b[n]) for n in want.names)
+
 
 def _parts(kind):
     a, b = ca.SX.sym("a", 5), ca.SX.sym("b", 3)

@@ -121,7 +121,6 @@ def test_the_rows_of_class_templates_are_told_narrow_by_their_origins(monkeypatc
     assert not narrow[np.argmax(counts)]           # the reference node's flow sum
 
 
-
 def test_the_incidence_rows_are_the_patterns_and_share_one_integer_per_column():
     """`_csr`'s rows are the Jacobian pattern's, row by row; a column held by several
     rows is one integer object in all of them (they live through the structural
@@ -135,6 +134,7 @@ def test_the_incidence_rows_are_the_patterns_and_share_one_integer_per_column():
     first: dict[int, int] = {}
     assert all(first.setdefault(v, v) is v for row in rows for v in row)
     assert max(first) > 256 and sum(map(len, rows)) > 2 * len(first)
+
 
 def test_the_entries_of_a_sub_block_are_casadis():
     rng = np.random.default_rng(6)
@@ -167,7 +167,6 @@ def test_one_equation_blocks_zeroed_piece_by_piece_give_the_same_functions(monke
     assert cut.state_names == whole.state_names
     assert cut.alg_names == whole.alg_names
     _same_functions(cut, whole, t=0.7, seed=11, draws=3)
-
 
 
 def test_one_equation_blocks_solved_together_are_the_ones_solved_alone():
@@ -206,6 +205,7 @@ def test_one_equation_blocks_solved_together_are_the_ones_solved_alone():
             place = at[100 + k]
             assert stacked[solved[place]] == point[k]           # its variable
             assert got[place] == pytest.approx(want[k], rel=1e-14, abs=1e-14)
+
 
 def _same_functions(a, b, t: float, seed: int, draws: int = 1) -> None:
     """The derivatives and logged variables of the compiled models ``a`` and ``b`` equal
