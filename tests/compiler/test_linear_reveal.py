@@ -103,3 +103,23 @@ def test_numbers_read_by_one_function_of_the_symbols_equal_the_entry_by_entry_re
     # with every symbol given, the symbols of the entries are not looked up at all
     monkeypatch.setattr(ca, "symvar", None)
     np.testing.assert_array_equal(lin._numbers(jac, ca.vertcat(known, q)), expected)
+
+
+@pytest.mark.parametrize("dense", [[0], [9], [0, 4, 5, 9], list(range(10))])
+def test_rows_differentiated_apart_give_casadis_jacobian(dense):
+    """`jacobian_apart` with the rows apart first, last, side by side and all of them:
+    CasADi's own Jacobian, entry by entry, at a random point; ``expr`` is left as it
+    was."""
+    x = ca.SX.sym("x", 12)
+    shared = ca.sin(x[3]) * x[4]             # a node that rows of both parts hold
+    expr = ca.vertcat(*[x[k] * x[k + 1] - shared if k % 3 else ca.sum1(x[k:]) + shared
+                        for k in range(10)])
+    before = ca.Function("before", [x], [expr])
+    ours = lin.jacobian_apart(expr, x, np.array(dense, dtype=np.int64))
+    theirs = ca.jacobian(expr, x)
+    assert ours.sparsity() == theirs.sparsity()
+    point = np.random.default_rng(5).uniform(-1.0, 1.0, 12)
+    np.testing.assert_array_equal(ca.Function("o", [x], [ours])(point).nonzeros(),
+                                  ca.Function("t", [x], [theirs])(point).nonzeros())
+    np.testing.assert_array_equal(ca.Function("e", [x], [expr])(point).full(),
+                                  before(point).full())
