@@ -123,3 +123,16 @@ def test_rows_differentiated_apart_give_casadis_jacobian(dense):
                                   ca.Function("t", [x], [theirs])(point).nonzeros())
     np.testing.assert_array_equal(ca.Function("e", [x], [expr])(point).full(),
                                   before(point).full())
+
+
+def test_the_entries_that_depend_on_the_inputs_are_those_of_the_full_pattern():
+    """`_depending` (one sweep, every input marked) against the rows of CasADi's pattern
+    input by input, on entries of one input, of several, of none (a number, a product
+    with zero) and of a comparison."""
+    x = ca.SX.sym("x", 6)
+    out = ca.vertcat(x[0], 3.0, x[1] * x[5], ca.SX(0) * x[2], x[3] > 0, ca.cos(2.0),
+                     ca.if_else(x[4] > 1, 2.0, 3.0), x[2] - x[2] + 1)
+    f = ca.Function("f", [x], [out])
+    rows = np.unique(np.asarray(f.sparsity_jac(0, 0).get_triplet()[0], dtype=np.int64))
+    np.testing.assert_array_equal(np.sort(lin._depending(f, 6)), rows)
+    assert rows.size and rows.size < out.numel()     # both kinds are there

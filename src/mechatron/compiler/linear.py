@@ -344,6 +344,17 @@ def _purely_linear_entries(rows: np.ndarray, cols: np.ndarray, fixed: np.ndarray
     return np.flatnonzero(np.bincount(rows[bad], minlength=n_rows) == 0).tolist()
 
 
+def _depending(f: ca.Function, n_in: int) -> np.ndarray:
+    """The entries of the output of ``f`` (one column of ``n_in`` inputs, one output) that
+    depend on its inputs at all: the pattern of the derivative of ``f(s, s, ..., s)``
+    in one scalar ``s``, one sweep of dependency bits with every input marked, where
+    the pattern input by input colours a million entries first (half the time of
+    `_numbers` at 10^6 entries)."""
+    s = ca.MX.sym("s")
+    return np.asarray(ca.jacobian_sparsity(f(ca.repmat(s, n_in, 1)), s).get_triplet()[0],
+                      dtype=np.int64)
+
+
 def _numbers(jac: ca.SX, symbols: ca.SX | None = None) -> np.ndarray:
     """The nonzeros of `jac` that are numbers, NaN for the others (expressions of
     symbols): read in bulk, with one dependency pattern and one evaluation. With
@@ -357,7 +368,7 @@ def _numbers(jac: ca.SX, symbols: ca.SX | None = None) -> np.ndarray:
             f = None
         if f is not None and not f.has_free():
             depends = np.zeros(nz.numel(), dtype=bool)
-            depends[f.sparsity_jac(0, 0).get_triplet()[0]] = True
+            depends[_depending(f, symbols.numel())] = True
             with np.errstate(all="ignore"):
                 values = np.asarray(f(np.zeros(symbols.numel())), dtype=float).ravel()
             values[depends] = np.nan
