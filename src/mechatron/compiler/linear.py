@@ -347,9 +347,9 @@ def _purely_linear_entries(rows: np.ndarray, cols: np.ndarray, fixed: np.ndarray
 def _depending(f: ca.Function, n_in: int) -> np.ndarray:
     """The entries of the output of ``f`` (one column of ``n_in`` inputs, one output) that
     depend on its inputs at all: the pattern of the derivative of ``f(s, s, ..., s)``
-    in one scalar ``s``, one sweep of dependency bits with every input marked, where
-    the pattern input by input colours a million entries first (half the time of
-    `_numbers` at 10^6 entries)."""
+    in one scalar ``s``, one sweep of dependency bits with every input marked. The
+    pattern input by input (``f.sparsity_jac``) colours its columns first: 2.85 us per
+    section of the RC ladder at N = 100000 (1.3 * 10^6 entries), this sweep 1.5."""
     s = ca.MX.sym("s")
     return np.asarray(ca.jacobian_sparsity(f(ca.repmat(s, n_in, 1)), s).get_triplet()[0],
                       dtype=np.int64)
