@@ -428,6 +428,26 @@ def test_origins_are_formed_when_read_and_read_as_the_equations_own(build, monke
     assert [str(o) for o in mine] == [str(o) for o in ref]
 
 
+def test_a_flow_sums_row_holds_no_more_variables_than_its_terms_say():
+    """`Origins.terms`: after alias elimination each kept flow sum's row holds at most
+    as many variables as the sum had terms (the reference node's all of its branches);
+    a row replaced since is no longer counted, and a copy counts on its own."""
+    flat = fl.flatten(ladder(6))
+    result = eliminate_aliases(flat)
+    origins, stacked = result.origins, result.stacked
+    unknowns = ca.vertcat(*ca.symvar(stacked))
+    counts = np.diff(np.asarray(ca.jacobian_sparsity(stacked, unknowns).get_crs()[0]))
+    told = np.flatnonzero(origins.terms >= 0)
+    assert told.size >= 6                           # a node per section, the reference
+    assert (counts[told] <= origins.terms[told]).all()
+    assert origins.terms.max() >= 6                 # the reference node's sum
+    assert (origins.terms[origins.which >= 0] == -1).all()   # template rows: not sums
+    k = int(told[0])
+    mine = origins.copy()
+    mine[k] = "replaced"
+    assert mine.terms[k] == -1 and origins.terms[k] >= 0
+
+
 def _eager(monkeypatch):
     """Class templates form every instance's residuals during flattening, on the
     instances' own variables (alias elimination then substitutes them), as before

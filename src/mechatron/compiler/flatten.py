@@ -580,15 +580,19 @@ class _SumEquation(FlatEquation):
     gathers the rows from the column (`stack_residuals`). A sum of three terms or more
     is no alias, and says so (``alias``), so that its residual is not read for that."""
 
-    __slots__ = ("row", "column", "uniform")
+    __slots__ = ("row", "column", "uniform", "terms")
 
-    def __init__(self, column: ca.SX, row: int, origin, alias, uniform: bool = False):
+    def __init__(self, column: ca.SX, row: int, origin, alias, uniform: bool = False,
+                 terms: int = -1):
         _RESIDUAL_SLOT.__set__(self, None)
         self.column, self.row, self.origin, self.owner, self.alias = \
             column, row, origin, "", alias
         #: every term the same variable of the same connector class: the same unit, so
         #: the sum agrees in its dimensions by construction (the dimension check skips it)
         self.uniform = uniform
+        #: how many variables the sum holds (-1: not counted); alias elimination puts
+        #: a representative or a number in the place of each, so no more after it
+        self.terms = terms
 
     residual = _formed_on_read(_RESIDUAL_SLOT, lambda eq: eq.column[eq.row])
 
@@ -602,15 +606,16 @@ class Origins(MutableSequence):
     its template's and its row, and its origin (`_TemplateOrigin`) formed on each read;
     any other origin is held as given. Only messages read origins, a few of a million;
     `templates` and `which` tell which rows come from which template without forming
-    any (`mechatron.compiler.relations`). Items may be replaced and appended as in a
-    list; `copy` shares the numbers."""
+    any (`mechatron.compiler.relations`), and `terms` how many variables a flow sum's
+    row holds at most. Items may be replaced and appended as in a list; `copy` shares
+    the numbers."""
 
-    __slots__ = ("templates", "which", "rows", "given", "_extra", "formed")
+    __slots__ = ("templates", "which", "rows", "given", "_extra", "formed", "terms")
 
     def __init__(self, eqs=()):
         templates: list = []
         number: dict = {}               # id(template) -> its place in templates
-        which, rows, given = [], [], {}
+        which, rows, given, sum_rows, sum_terms = [], [], {}, [], []
         for k, eq in enumerate(eqs):
             if type(eq) is _TemplateEquation and _ORIGIN_SLOT.__get__(eq) is None:
                 tpl = eq.template
@@ -624,11 +629,19 @@ class Origins(MutableSequence):
                 which.append(-1)
                 rows.append(0)
                 given[k] = eq.origin
+                if type(eq) is _SumEquation and eq.terms >= 0 and \
+                        _RESIDUAL_SLOT.__get__(eq) is None:
+                    sum_rows.append(k)
+                    sum_terms.append(eq.terms)
         self.templates = templates
         #: each row's template (its place in `templates`), -1 for an origin held as given
         self.which = np.array(which, dtype=np.int32)
         self.rows = np.array(rows, dtype=np.int64)     # its row in the template's column
         self.given = given              # row -> origin, for rows held or replaced
+        #: the variables a flow sum's row holds at most (its terms), -1 for other rows
+        #: and for a row replaced since
+        self.terms = np.full(len(which), -1, dtype=np.int32)
+        self.terms[sum_rows] = sum_terms
         self._extra: list = []          # appended after the rows
         self.formed: list | None = None     # all, after a deletion or an insertion
 
@@ -673,6 +686,7 @@ class Origins(MutableSequence):
             self._extra[k - n] = value
         else:
             self.given[k] = value
+            self.terms[k] = -1          # (its residual may be another now)
 
     def _form_all(self) -> None:
         if self.formed is None:
@@ -693,6 +707,7 @@ class Origins(MutableSequence):
         out = Origins()
         out.templates, out.which, out.rows = self.templates, self.which, self.rows
         out.given, out._extra = dict(self.given), list(self._extra)
+        out.terms = self.terms.copy()
         out.formed = None if self.formed is None else list(self.formed)
         return out
 
@@ -2864,7 +2879,8 @@ def _sum_equations(flat: FlatModel, rows: np.ndarray, cols: np.ndarray, vals: np
     uniq, inverse = np.unique(rows * width + cols, return_inverse=True)
     total = np.bincount(inverse, weights=vals)
     terms = np.bincount(uniq[total != 0] // width, minlength=n).tolist()
-    flat.equations += [_SumEquation(sums, r, origin, _NO_ALIAS if count > 2 else None, same)
+    flat.equations += [_SumEquation(sums, r, origin, _NO_ALIAS if count > 2 else None, same,
+                                    count)
                        for r, (origin, same, count) in enumerate(zip(origins, uniform,
                                                                       terms))]
 

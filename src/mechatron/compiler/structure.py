@@ -101,7 +101,8 @@ def _narrow_rows(origins, n_rows: int) -> np.ndarray | None:
     equation holds at most as many variables as the template has symbols (its
     instance's variables, their derivatives, parameters and time; aliases replaced by
     one variable or a number each), unless the row was replaced since (its origin then
-    held as given). None when ``origins`` are no such record of these rows."""
+    held as given); a flow sum's row at most its terms (`Origins.terms`). None when
+    ``origins`` are no such record of these rows."""
     if not isinstance(origins, Origins) or origins.formed is not None \
             or len(origins) != n_rows or len(origins.which) != n_rows:
         return None
@@ -112,6 +113,8 @@ def _narrow_rows(origins, n_rows: int) -> np.ndarray | None:
         narrow[at] = small[origins.which[at]]
         if origins.given:
             narrow[list(origins.given)] = False
+    terms = origins.terms
+    narrow[(terms >= 0) & (terms < DENSE_ROW)] = True
     return narrow
 
 
