@@ -582,16 +582,16 @@ class _SumEquation(FlatEquation):
 
     __slots__ = ("row", "column", "uniform", "terms")
 
-    def __init__(self, column: ca.SX, row: int, origin, alias, uniform: bool = False,
-                 terms: int = -1):
+    def __init__(self, column: ca.SX, row: int, origin, alias, uniform: bool,
+                 terms: int):
         _RESIDUAL_SLOT.__set__(self, None)
         self.column, self.row, self.origin, self.owner, self.alias = \
             column, row, origin, "", alias
         #: every term the same variable of the same connector class: the same unit, so
         #: the sum agrees in its dimensions by construction (the dimension check skips it)
         self.uniform = uniform
-        #: how many variables the sum holds (-1: not counted); alias elimination puts
-        #: a representative or a number in the place of each, so no more after it
+        #: how many variables the sum holds; alias elimination puts a representative
+        #: or a number in the place of each, so no more after it
         self.terms = terms
 
     residual = _formed_on_read(_RESIDUAL_SLOT, lambda eq: eq.column[eq.row])
@@ -629,8 +629,7 @@ class Origins(MutableSequence):
                 which.append(-1)
                 rows.append(0)
                 given[k] = eq.origin
-                if type(eq) is _SumEquation and eq.terms >= 0 and \
-                        _RESIDUAL_SLOT.__get__(eq) is None:
+                if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None:
                     sum_rows.append(k)
                     sum_terms.append(eq.terms)
         self.templates = templates
