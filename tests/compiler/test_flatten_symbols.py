@@ -179,9 +179,10 @@ def test_template_instances_take_their_variables_by_row():
 @pytest.mark.parametrize("build", [lambda: ladder(30), nested_model, reading_model])
 def test_rows_and_numbers_kept_by_flattening_are_shared_integers(build):
     """The rows and variable numbers that flattening keeps per instance and per equation
-    (a template instance's variable slots, its equations' alias hints and rows) are
-    shared integer objects (those `_bind_symbols` made once), not one object of their
-    own each; and each hint still names the variables its equation relates."""
+    (a template instance's variable slots, its equations' rows) are shared integer
+    objects (those `_bind_symbols` made once), not one object of their own each; a
+    template's equations are held as those numbers, no object formed for them, and
+    their alias hints, formed when read, name the variables each equation relates."""
     flat = fl.flatten(build())
     number = flat.variable_rows()
     named_by = {number[n]: n for n in flat.variables}    # a hint's number -> the name
@@ -190,6 +191,18 @@ def test_rows_and_numbers_kept_by_flattening_are_shared_integers(build):
     def shared(x) -> bool:
         return row_object.setdefault(x, x) is x or -5 <= x <= 256   # small ints: cached
 
+    eqs = flat.equations
+    assert type(eqs) is fl.FlatEquations
+    held_rows = [r for t, r in zip(eqs.which, eqs.rows) if t >= 0]
+    assert all(map(shared, held_rows))
+    # formed only where variables were moved back to their place of declaration
+    # (`_declaration_order`, which moves the hints by number with them): those kept
+    formed = [eq for eq in eqs.given if isinstance(eq, fl._TemplateEquation)]
+    assert bool(held_rows) != bool(formed)
+    for eq in formed:
+        hint = eq.alias
+        if hint[0] in ("pair", "const") and type(hint[1]) is int:
+            assert all(map(shared, hint[1:3] if hint[0] == "pair" else hint[1:2]))
     numbers = 0
     for eq in flat.equations:
         if not isinstance(eq, fl._TemplateEquation):
@@ -199,7 +212,6 @@ def test_rows_and_numbers_kept_by_flattening_are_shared_integers(build):
         if hint[0] in ("pair", "const") and type(hint[1]) is int:
             numbers += 1
             held = hint[1:3] if hint[0] == "pair" else hint[1:2]
-            assert all(shared(x) for x in held)
             named = {named_by[x] for x in held}
             assert named <= {s.name() for s in ca.symvar(eq.residual)}
         tpl = eq.template

@@ -542,3 +542,66 @@ def test_a_residual_read_after_alias_elimination_is_the_one_written():
              if isinstance(a, fl._TemplateEquation)]
     assert any(a.template.replaced for a, _ in pairs)
     assert [str(a.residual) for a, _ in pairs] == [str(b.residual) for _, b in pairs]
+
+
+def test_a_templates_equations_are_held_as_numbers_and_formed_when_read():
+    """`FlatModel.equations` holds a class template's equations as numbers (no object
+    each) and forms one when read, the same object on every read, so that what is set
+    on it stays; appending and deleting the last ones keep the numbers, an insertion
+    before the end holds every equation as an object, in the same order."""
+    flat = fl.flatten(ladder(3))
+    eqs = flat.equations
+    assert type(eqs) is fl.FlatEquations
+    numbered = [k for k, t in enumerate(eqs.which) if t >= 0]
+    assert len(numbered) > len(eqs) // 2 and not any(
+        isinstance(eq, fl._TemplateEquation) for eq in eqs.given)
+    k = numbered[5]
+    tpl, row = eqs.templates[eqs.which[k]], eqs.rows[k]
+    eq = eqs[k]
+    assert type(eq) is fl._TemplateEquation and (eq.template, eq.row) == (tpl, row)
+    assert eq.owner == tpl.paths[row // tpl.n_eq] and eq.alias == tpl.hint(row)
+    assert eqs[k] is eq and eqs[k - len(eqs)] is eq and eqs.which[k] == -1
+    marker = ca.SX.sym("marker")
+    eq.residual = marker
+    assert eqs[k].residual is marker
+    texts = [str(e.origin) for e in list(eqs)]
+    before = len(eqs)
+    extra = fl.FlatEquation(ca.SX.sym("x"), "extra", "")
+    eqs.append(extra)
+    eqs += [extra]
+    assert len(eqs) == before + 2 and eqs[-1] is extra
+    del eqs[before:]
+    assert len(eqs) == before and eqs.plain is None and extra not in eqs.held()
+    eqs.insert(3, extra)
+    assert eqs.plain is not None and eqs[3] is extra
+    del eqs[3]
+    assert [str(e.origin) for e in eqs] == texts and eqs[k].residual is marker
+
+
+def _alias_both(build):
+    """Alias elimination of ``build()`` with the templates' equations held as numbers,
+    and with every equation formed as an object first (the list it read before)."""
+    numbered = eliminate_aliases(fl.flatten(build()))
+    flat = fl.flatten(build())
+    flat.equations = list(flat.equations)
+    return numbered, eliminate_aliases(flat)
+
+
+def reading_model():
+    from tests.compiler.test_folding import reading_model as build
+    return build()
+
+
+@pytest.mark.parametrize("build", [lambda: ladder(5), drive, stop_and_springs,
+                                   backlash_chain, reading_model])
+def test_alias_elimination_on_numbers_equals_it_on_the_equations(build):
+    """Alias elimination reads the templates' hints as arrays and keeps their rows as
+    numbers: the same classes, representatives, kept equations (residual, origin,
+    owner, in order) and starts as reading every equation as an object."""
+    a, b = _alias_both(build)
+    assert a.unknowns == b.unknowns and dict(a.eliminated) == dict(b.eliminated)
+    assert a.starts == b.starts and a.n_before == b.n_before
+    assert a.owners == b.owners
+    assert [str(o) for o in a.origins] == [str(o) for o in b.origins]
+    assert [str(r) for r in ca.vertsplit(a.stacked)] == \
+        [str(r) for r in ca.vertsplit(b.stacked)]

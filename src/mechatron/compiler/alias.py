@@ -25,9 +25,10 @@ from operator import attrgetter
 import casadi as ca
 import numpy as np
 
-from mechatron.compiler.flatten import (ColumnRows, FlatEquation, FlatModel, Origins,
-                                       _TemplateEquation, _gather, column_of,
-                                       stack_columns, stack_residuals)
+from mechatron.compiler.flatten import (ColumnRows, EquationRows, FlatEquation,
+                                       FlatEquations, FlatModel, Origins,
+                                       _TemplateEquation, _gather, _residual_of, _row_of,
+                                       column_of, stack_columns)
 from mechatron.errors import InitializationError
 
 __all__ = ["AliasResult", "eliminate_aliases"]
@@ -176,29 +177,33 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         if not union(ia, ib, s):
             redundant.append(FlatEquation(unknowns[names[ia]].sym -
                                           s * unknowns[names[ib]].sym, origin))
-    kept = redundant
-    keep = kept.append
-    for eq in flat.equations:
+
+    def absorbed(eq) -> bool:
+        """Whether ``eq`` is an alias (or a constant) recorded now: not kept."""
         hint = eq.alias              # read off the class's template once (flatten)
         if hint is None:
             hint = _read_alias(eq.residual, unknowns)
             if hint is None:
-                keep(eq)
-                continue
+                return False
         tag = hint[0]
         if tag == "pair":
             a, b = hint[1], hint[2]
             if type(a) is not int:          # by name; a template's by number
                 a, b = index[a], index[b]
-            if union(a, b, hint[3]):
-                continue
-        elif tag == "const":
+            return union(a, b, hint[3])
+        if tag == "const":
             a = hint[1]
-            if fix(a if type(a) is int else index[a], hint[2]):
-                continue
-        keep(eq)
+            return fix(a if type(a) is int else index[a], hint[2])
+        return False
+
+    equations = flat.equations
+    numbered = equations.numbered() if type(equations) is FlatEquations else None
+    if numbered is None:
+        kept = EquationRows.of(redundant + [eq for eq in equations if not absorbed(eq)])
+    else:
+        kept = _scan(equations, numbered, redundant, union, fix, absorbed)
     origins = Origins(kept)                 # each formed when read (messages)
-    owners = list(map(_OWNER, kept))
+    owners = _owners(kept)
     n_before = len(flat.equations) + len(flat.aliases)
     # class templates whose residuals are not formed yet: formed below on the
     # replacements, only the rows kept (see `flatten._Template.defer`)
@@ -210,18 +215,76 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
         # the numbers of the differentiated variables, read by both steps below
         derived = _differentiated(flat, index, n)
         gone = _classes(flat, names, index, parent, factor, const, result, derived)
-        replaced = _replacements(flat, names, index, gone, result, derived) if kept \
-            else None
-    stacked = _kept_residuals(kept, pending, flat, replaced) if kept else None
+        replaced = _replacements(flat, names, index, gone, result, derived) \
+            if len(kept) else None
+    stacked = _kept_residuals(kept, pending, flat, replaced) if len(kept) else None
     for tpl in pending:     # a residual read now is formed as written, alone
         tpl.pending, tpl.replaced = None, True
     # the union-find is done: the numbering lives on in `result.eliminated` (read with
     # `get` alone), its forest and factors (a number and a float per variable) do not
     index.parent = index.factor = None
-    if kept:
+    if len(kept):
         result.residuals = ColumnRows(stacked)     # each formed when read
         result.stacked = stacked
     return result
+
+
+def _scan(equations: FlatEquations, numbered: tuple, redundant: list, union, fix,
+          absorbed) -> EquationRows:
+    """Alias elimination over the equations as `FlatEquations` holds them: the alias
+    hints of the class templates' rows read as arrays (`flatten._Template.hint_arrays`),
+    each pair and constant recorded in the equations' order (``union``, ``fix``), any
+    other equation read one by one (``absorbed``). The equations kept, after
+    ``redundant``."""
+    which, rows = numbered
+    n = len(which)
+    tag = np.full(n, 3, dtype=np.int8)       # 3: read one by one
+    a = np.zeros(n, dtype=np.int64)
+    b = np.zeros(n, dtype=np.int64)
+    s = np.zeros(n)
+    for tpl, places in EquationRows(equations.templates, which, rows, []).by_template():
+        t_tag, t_a, t_b, t_s = tpl.hint_arrays()
+        r = rows[places]
+        tag[places], a[places], b[places], s[places] = t_tag[r], t_a[r], t_b[r], t_s[r]
+    keep = tag == 0
+    look = np.flatnonzero(~keep)
+    formed = False
+    for k, g, x, y, f in zip(look.tolist(), tag[look].tolist(), a[look].tolist(),
+                             b[look].tolist(), s[look].tolist()):
+        if g == 1:
+            if not union(x, y, f):
+                keep[k] = True
+        elif g == 2:
+            if not fix(x, f):
+                keep[k] = True
+        else:
+            formed = formed or which[k] >= 0       # a template's row by path: formed
+            if not absorbed(equations[k]):
+                keep[k] = True
+    if formed:
+        which, rows = equations.numbered()
+    places = np.flatnonzero(keep)
+    which, rows = which[places], rows[places]
+    given = equations.given
+    held = which < 0
+    objects = redundant + [given[r] for r in rows[held].tolist()]
+    m = len(redundant)
+    rows[held] = np.arange(m, m + int(held.sum()))
+    return EquationRows(equations.templates,
+                        np.concatenate([np.full(m, -1, dtype=np.int32), which]),
+                        np.concatenate([np.arange(m, dtype=np.int64), rows]), objects)
+
+
+def _owners(kept: EquationRows) -> list[str]:
+    """The owner of each of ``kept``: a template's row read off its instance's path."""
+    out = np.empty(len(kept), dtype=object)
+    held = kept.which < 0
+    if held.any():
+        out[held] = np.fromiter(map(_OWNER, kept.objects), dtype=object,
+                                count=len(kept.objects))
+    for tpl, places in kept.by_template():
+        out[places] = np.array(tpl.paths, dtype=object)[kept.rows[places] // tpl.n_eq]
+    return out.tolist()
 
 
 class _Eliminated(Mapping):
@@ -405,7 +468,7 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     return gone
 
 
-def _kept_residuals(kept: list, pending: list, flat,
+def _kept_residuals(kept: EquationRows, pending: list, flat,
                     replaced: Replacements | None) -> ca.SX:
     """The residuals of ``kept`` stacked (a class template's rows gathered from its
     column), with the eliminated variables replaced (`Replacements`, if any): the
@@ -413,38 +476,62 @@ def _kept_residuals(kept: list, pending: list, flat,
     only the rows some instance keeps, and the other residuals substituted at once."""
     waiting = {id(t): t for t in pending}
     rows: dict = {}                  # id(template) -> its rows that are kept
-    others = []
-    for eq in kept:
-        if type(eq) is _TemplateEquation and id(eq.template) in waiting:
-            rows.setdefault(id(eq.template), set()).add(eq.row % eq.template.n_eq)
-        else:
-            others.append(eq)
+    # a kept row read from a template formed here: (its place, the template's id)
+    from_template = [(k, id(eq.template)) for k, eq in
+                     zip(np.flatnonzero(kept.which < 0).tolist(), kept.objects)
+                     if type(eq) is _TemplateEquation and id(eq.template) in waiting]
+    for k, key in from_template:
+        eq = kept.objects[kept.rows[k]]
+        rows.setdefault(key, set()).add(eq.row % eq.template.n_eq)
+    groups = list(kept.by_template())
+    for tpl, places in groups:
+        if id(tpl) in waiting:
+            rows.setdefault(id(tpl), set()).update(
+                np.unique(kept.rows[places] % tpl.n_eq).tolist())
     place = {}     # id(template) -> (its column, n_eq, rows kept, each row's place)
     for key, tpl in waiting.items():
         if key in rows:
             keep = sorted(rows[key])
             tpl.instantiate(flat, replaced, keep)
-            at = [-1] * tpl.n_eq
-            for j, k in enumerate(keep):
-                at[k] = j
+            at = np.full(tpl.n_eq, -1, dtype=np.int64)
+            at[keep] = np.arange(len(keep))
             place[key] = (tpl.column, tpl.n_eq, len(keep), at)
-    rest = stack_residuals(others) if others else None
-    if rest is not None and replaced is not None:
-        rest = ca.substitute(rest, replaced.old, replaced.new)
+    # the rest, in order: the objects and the rows of templates not formed here
+    n = len(kept)
+    index = np.full(n, -1, dtype=np.int64)
+    columns, offset, start = [], {}, 0
+    for key, (column, _, _, _) in place.items():
+        offset[key] = start
+        columns.append(column)
+        start += column.numel()
+    for tpl, places in groups:
+        got = place.get(id(tpl))
+        if got is not None:
+            instance, k = np.divmod(kept.rows[places], got[1])
+            index[places] = offset[id(tpl)] + instance * got[2] + got[3][k]
+    for k, key in from_template:
+        eq = kept.objects[kept.rows[k]]
+        column, n_eq, m, at = place[key]
+        instance, j = divmod(eq.row, n_eq)
+        index[k] = offset[key] + instance * m + at[j]
+    rest_at = np.flatnonzero(index < 0)
+    if not len(rest_at):
+        rest = None
+    else:
+        templates, which, rows_of = kept.templates, kept.which, kept.rows
+        items = [(None, None)] * len(rest_at)
+        for j, k in enumerate(rest_at.tolist()):
+            t = which[k]
+            items[j] = _row_of(templates[t], int(rows_of[k])) if t >= 0 else \
+                _residual_of(kept.objects[rows_of[k]])
+        rest = _gather(items)
+        if replaced is not None:
+            rest = ca.substitute(rest, replaced.old, replaced.new)
     if not place:                   # no template formed here: every residual is rest
         return rest
-    items = []
-    j = 0
-    for eq in kept:
-        got = place.get(id(eq.template)) if type(eq) is _TemplateEquation else None
-        if got is None:
-            items.append((rest, j))
-            j += 1
-        else:
-            column, n_eq, m, at = got
-            instance, k = divmod(eq.row, n_eq)
-            items.append((column, instance * m + at[k]))
-    return _gather(items)
+    index[rest_at] = start + np.arange(len(rest_at))
+    parts = columns + ([rest] if rest is not None else [])
+    return stack_columns(*parts)[index.tolist()]
 
 
 def _differentiated(flat, index, n: int) -> list[int]:

@@ -52,9 +52,11 @@ from fractions import Fraction
 from itertools import repeat
 
 import casadi as ca
+import numpy as np
 
-from mechatron.compiler.flatten import (FlatModel, _bind_symbols, _collect_equations,
-                                        _SumEquation, _TemplateEquation, _walk,
+from mechatron.compiler.flatten import (FlatEquations, FlatModel, _bind_symbols,
+                                        _collect_equations, _SumEquation,
+                                        _TemplateEquation, _walk,
                                         column_of, stack_columns, stack_residuals)
 from mechatron.core.component import Component
 from mechatron.core.context import BuildContext
@@ -468,7 +470,7 @@ def dimension_problems(flat, model=None) -> list[str]:
     # equations instantiated from one class's template have the same dimensions in
     # every instance (same declarations, bound parameters checked to their units):
     # the first instance stands for all
-    eqs = [eq for eq in flat.equations if _checked(eq)]
+    eqs = [eq for eq in _first_instances(flat.equations) if _checked(eq)]
     extra, extra_origins = _event_rows(flat)
     # the rows of templates and flow sums gathered from their columns (a vertcat of
     # scalars converts each from Python)
@@ -512,6 +514,17 @@ def dimension_problems(flat, model=None) -> list[str]:
             problems.append(f"{_describe(flat, owner)}: {_strip(text, owner)}: "
                             f"{namer.problem(dims[k])}. {_HINT}")
     return problems
+
+
+def _first_instances(eqs):
+    """``eqs`` (`FlatModel.equations`) without the rows of class templates past their
+    first instance (see `_checked`), in order: held as numbers, those are not formed."""
+    numbered = eqs.numbered() if type(eqs) is FlatEquations else None
+    if numbered is None:
+        return eqs
+    which, rows = numbered
+    n_eq = np.array([t.n_eq for t in eqs.templates] + [0], dtype=np.int64)
+    return [eqs[k] for k in np.flatnonzero((which < 0) | (rows < n_eq[which])).tolist()]
 
 
 def _checked(eq) -> bool:

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from mechatron.compiler.compiled import CHATTER_FLAG, LOOP_FLAG
-from mechatron.compiler.flatten import _TemplateEquation
+from mechatron.compiler.flatten import _TemplateEquation, _held
 from mechatron.compiler.relations import Relation, _rebuild
 from mechatron.core.events import MAX_ROUNDS, Clock, Reinit, SampleCondition
 from mechatron.errors import StructuralError
@@ -106,7 +106,7 @@ def replace_pre(flat) -> None:
     new = [ctx.unknowns[name] for name in ctx.pre]
     # a class template's equations hold no pre() (see `flatten._Template`): their
     # residuals are not formed for this
-    eqs = [eq for eq in flat.equations + flat.initial_equations
+    eqs = [eq for eq in [*_held(flat.equations), *flat.initial_equations]
            if type(eq) is not _TemplateEquation
            and ca.depends_on(eq.residual, ca.vertcat(*old))]
     if eqs:

@@ -613,29 +613,32 @@ class Origins(MutableSequence):
     __slots__ = ("templates", "which", "rows", "given", "_extra", "formed", "terms")
 
     def __init__(self, eqs=()):
-        templates: list = []
-        number: dict = {}               # id(template) -> its place in templates
-        which, rows, given, sum_rows, sum_terms = [], [], {}, [], []
-        for k, eq in enumerate(eqs):
+        if type(eqs) is not EquationRows:
+            eqs = EquationRows.of(list(eqs))
+        templates = list(eqs.templates)
+        number = {id(t): k for k, t in enumerate(templates)}    # their places
+        which = eqs.which.astype(np.int32)
+        rows = eqs.rows.astype(np.int64)
+        given, sum_rows, sum_terms = {}, [], []
+        held = np.flatnonzero(which < 0).tolist()
+        for k, eq in zip(held, [eqs.objects[r] for r in rows[held].tolist()]):
             if type(eq) is _TemplateEquation and _ORIGIN_SLOT.__get__(eq) is None:
                 tpl = eq.template
                 t = number.get(id(tpl))
                 if t is None:
                     t = number[id(tpl)] = len(templates)
                     templates.append(tpl)
-                which.append(t)
-                rows.append(eq.row)
+                which[k], rows[k] = t, eq.row
             else:
-                which.append(-1)
-                rows.append(0)
+                rows[k] = 0
                 given[k] = eq.origin
                 if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None:
                     sum_rows.append(k)
                     sum_terms.append(eq.terms)
         self.templates = templates
         #: each row's template (its place in `templates`), -1 for an origin held as given
-        self.which = np.array(which, dtype=np.int32)
-        self.rows = np.array(rows, dtype=np.int64)     # its row in the template's column
+        self.which = which
+        self.rows = rows                # its row in the template's column
         self.given = given              # row -> origin, for rows held or replaced
         #: the variables a flow sum's row holds at most (its terms), -1 for other rows
         #: and for a row replaced since
@@ -711,27 +714,205 @@ class Origins(MutableSequence):
         return out
 
 
+class FlatEquations(MutableSequence):
+    """`FlatModel.equations`: the model's equations in order. A class template's
+    equation is held as two numbers, its template's place in `templates` and its row in
+    the template's column (`_Template.add` appends them: no object per equation), and
+    formed as a `_TemplateEquation` when read, then held as given so that what is set on
+    it stays; any other equation is held as given. Alias elimination and the dimension
+    check read the numbers in bulk (`numbered`). Reading, replacing, appending and
+    deleting the last ones keep the numbers; any other deletion or insertion holds every
+    equation as given (`plain`)."""
+
+    __slots__ = ("templates", "_place", "which", "rows", "given", "plain")
+
+    def __init__(self, items=()):
+        self.templates: list = []
+        self._place: dict = {}          # id(template) -> its place in templates
+        #: each equation's template (its place in `templates`), -1 if held as given
+        self.which: list = []
+        #: and its row in the template's column, or its place in `given`
+        self.rows: list = []
+        #: the equations held as given (None where one was deleted)
+        self.given: list = []
+        #: every equation as a list, after a deletion or an insertion (then the only
+        #: store)
+        self.plain: list | None = None
+        self.extend(items)
+
+    def add_rows(self, tpl, first: int, last: int, ints) -> None:
+        """Append rows ``first .. last - 1`` of template ``tpl``; ``ints`` holds their
+        numbers (`_integers`)."""
+        if self.plain is not None:
+            self.plain.extend(map(tpl.equation, range(first, last)))
+            return
+        t = self._place.get(id(tpl))
+        if t is None:
+            t = self._place[id(tpl)] = len(self.templates)
+            self.templates.append(tpl)
+        self.which += repeat(t, last - first)
+        self.rows += ints[first:last]
+
+    def numbered(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(which, rows)`` as arrays (see the attributes); None once `plain`."""
+        if self.plain is not None:
+            return None
+        return (np.array(self.which, dtype=np.int32), np.array(self.rows, dtype=np.int64))
+
+    def held(self) -> list:
+        """The equations held as objects (any order): those not of a class template,
+        and the template equations formed since."""
+        return self.plain if self.plain is not None else \
+            [eq for eq in self.given if eq is not None]
+
+    def __len__(self) -> int:
+        return len(self.plain) if self.plain is not None else len(self.which)
+
+    def __getitem__(self, k):
+        if self.plain is not None:
+            return self.plain[k]
+        if isinstance(k, slice):
+            return [self[i] for i in range(*k.indices(len(self.which)))]
+        t = self.which[k]
+        if t < 0:
+            return self.given[self.rows[k]]
+        eq = self.templates[t].equation(self.rows[k])
+        self.which[k], self.rows[k] = -1, len(self.given)
+        self.given.append(eq)
+        return eq
+
+    def __setitem__(self, k, value) -> None:
+        if self.plain is None and isinstance(k, slice):
+            self._form_all()
+        if self.plain is not None:
+            self.plain[k] = value
+        elif self.which[k] < 0:
+            self.given[self.rows[k]] = value
+        else:
+            self.which[k], self.rows[k] = -1, len(self.given)
+            self.given.append(value)
+
+    def __delitem__(self, k) -> None:
+        if self.plain is None and isinstance(k, slice) and k.step in (None, 1) and \
+                (k.stop is None or k.stop >= len(self.which)):
+            start = k.indices(len(self.which))[0]       # the last ones: numbers kept
+            for t, r in zip(self.which[start:], self.rows[start:]):
+                if t < 0:
+                    self.given[r] = None
+            del self.which[start:], self.rows[start:]
+            return
+        self._form_all()
+        del self.plain[k]
+
+    def insert(self, i: int, value) -> None:
+        if self.plain is None and i >= len(self.which):
+            self.append(value)
+            return
+        self._form_all()
+        self.plain.insert(i, value)
+
+    def append(self, value) -> None:
+        if self.plain is not None:
+            self.plain.append(value)
+            return
+        self.which.append(-1)
+        self.rows.append(len(self.given))
+        self.given.append(value)
+
+    def __iter__(self):
+        if self.plain is not None:
+            return iter(self.plain)
+        return map(self.__getitem__, range(len(self.which)))
+
+    def __add__(self, other) -> list:
+        return list(self) + list(other)
+
+    def __repr__(self) -> str:
+        return repr(list(self))
+
+    def _form_all(self) -> None:
+        if self.plain is None:
+            plain = list(self)
+            self.which, self.rows, self.given, self.plain = [], [], [], plain
+
+
+class EquationRows:
+    """Equations in order, as `FlatEquations` holds them: ``which`` the template of each
+    (its place in ``templates``) or -1 for one held as an object, ``rows`` its row in
+    the template's column or its place in ``objects`` (the objects in order)."""
+
+    __slots__ = ("templates", "which", "rows", "objects")
+
+    def __init__(self, templates: list, which: np.ndarray, rows: np.ndarray,
+                 objects: list):
+        self.templates, self.which, self.rows, self.objects = \
+            templates, which, rows, objects
+
+    @classmethod
+    def of(cls, eqs: list) -> EquationRows:
+        """``eqs``, every one held as an object."""
+        n = len(eqs)
+        return cls([], np.full(n, -1, dtype=np.int32), np.arange(n, dtype=np.int64),
+                   list(eqs))
+
+    def __len__(self) -> int:
+        return len(self.which)
+
+    def __iter__(self):
+        """Each equation as an object, a template's row formed (`_Template.equation`)."""
+        templates, objects = self.templates, self.objects
+        for t, r in zip(self.which.tolist(), self.rows.tolist()):
+            yield objects[r] if t < 0 else templates[t].equation(r)
+
+    def by_template(self):
+        """``(template, places)`` for each template with rows here, the places
+        ascending."""
+        which = self.which
+        numbered = np.flatnonzero(which >= 0)
+        if not len(numbered):
+            return
+        order = numbered[np.argsort(which[numbered], kind="stable")]
+        cut = np.flatnonzero(np.diff(which[order])) + 1
+        for places in np.split(order, cut):
+            yield self.templates[which[places[0]]], places
+
+
+def _held(eqs) -> list:
+    """The equations of ``eqs`` (`FlatModel.equations`) held as objects, in any order:
+    all but the class templates' rows not read yet, which are never those looked for."""
+    return eqs.held() if type(eqs) is FlatEquations else eqs
+
+
 def stack_residuals(eqs) -> ca.SX:
     """``vertcat`` of the residuals of ``eqs``: the rows of template equations and flow
     sums gathered from their columns by one index (a residual set since, e.g. by `pre`'s
     replacement, is taken as it is), the others stacked."""
-    return _gather(_template_row(eq)
-                   if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None
-                   else (eq.column, eq.row)
-                   if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None
-                   else (None, eq.residual) for eq in eqs)
+    return _gather(map(_residual_of, eqs))
+
+
+def _residual_of(eq) -> tuple:
+    """``(column, row)`` of ``eq``'s residual, or ``(None, residual)`` (see `_gather`)."""
+    if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None:
+        return _template_row(eq)
+    if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None:
+        return eq.column, eq.row
+    return None, eq.residual
 
 
 def _template_row(eq) -> tuple:
-    """``(column, row)`` of a template equation's residual: a row of the first instance
-    of a template not formed yet is read off that instance alone (the dimension check
-    reads no other), any other from the column of all instances."""
-    tpl = eq.template
+    """``(column, row)`` of a template equation's residual (`_row_of`)."""
+    return _row_of(eq.template, eq.row)
+
+
+def _row_of(tpl, row: int) -> tuple:
+    """``(column, row)`` of the residual of row ``row`` of template ``tpl``: a row of
+    the first instance of a template not formed yet is read off that instance alone
+    (the dimension check reads no other), any other from the column of all instances."""
     if tpl.replaced:
-        return None, tpl.own_row(eq.row)
-    if tpl.column is None and eq.row < tpl.n_eq:
-        return tpl.first_rows(), eq.row
-    return tpl.formed(), eq.row
+        return None, tpl.own_row(row)
+    if tpl.column is None and row < tpl.n_eq:
+        return tpl.first_rows(), row
+    return tpl.formed(), row
 
 
 def stack_columns(*parts: ca.SX) -> ca.SX:
@@ -786,7 +967,7 @@ class FlatModel:
     #: binding order: records, or what forms one (`bound_parameters`)
     bindings: list = field(default_factory=list, repr=False)
     variables: MutableMapping[str, FlatVariable] = field(default_factory=_Variables)
-    equations: list[FlatEquation] = field(default_factory=list)
+    equations: MutableSequence = field(default_factory=FlatEquations)
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
     components: dict[str, str] = field(default_factory=dict)  # path -> class name
     #: the class of every element of the tree (a pass that few classes need skips the
@@ -1743,7 +1924,7 @@ def _collect_equations(flat: FlatModel, elements, problems,
         if tpl is not None:
             tpl.defer(flat)
     _discrete_states(flat, problems)
-    pending = [eq for eq in flat.equations
+    pending = [eq for eq in _held(flat.equations)
                if type(eq) is not _TemplateEquation and eq.residual is None]
     if pending:
         res = ca.vertcat(*[eq.origin.lhs for eq in pending]) - \
@@ -1956,8 +2137,16 @@ class _Template:
         self.paths.append(owner)
         if self.par_slots:
             self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
-        base = bases[-1 - len(self.ports):]
+        first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
+        if self.n_eq:
+            equations = flat.equations
+            if type(equations) is FlatEquations:    # held as numbers, hints by `hint`
+                equations.add_rows(self, first, first + self.n_eq,
+                                   _integers(shared, first + self.n_eq - 1))
+            else:
+                equations += map(self.equation, range(first, first + self.n_eq))
         if self.derived and self.var_rows is not None:
+            base = bases[-1 - len(self.ports):]
             # each differentiated variable's row among the model's variables (its
             # element's first row and its place after it), read by alias elimination
             # and the dimension check instead of its name
@@ -1971,24 +2160,55 @@ class _Template:
             # (`FlatModel.derivatives_by_row`)
             state.setdefault("_derivative_bulk", []).extend(
                 [(row, k) for _, row, k in noted if k >= 0])
+
+    def equation(self, row: int) -> _TemplateEquation:
+        """The equation of row ``row`` (instance after instance), with its alias hint
+        (`hint`)."""
+        return _TemplateEquation(self, self.paths[row // self.n_eq], self.hint(row), row)
+
+    def hint(self, row: int) -> tuple:
+        """The alias hint of row ``row``: by variable number (its row in the model's
+        variables) where the instance's variables were bound in bulk, else by path."""
+        instance, k = divmod(row, self.n_eq)
+        width = 1 + len(self.ports)
+        base = self.bases[instance * width:(instance + 1) * width]
         if self.row_hints is not None and all(base[w] >= 0 for w in self.row_bases):
-            # by variable number (its row in the model's variables), see `_Template`
-            ints = _integers(shared, max((base[w] for w in self.row_bases), default=0)
-                             + self.row_span)
-            hints = [h if h[0] == "none" else
-                     ("pair", ints[base[h[1]] + h[2]], ints[base[h[3]] + h[4]], h[5])
-                     if h[0] == "pair" else ("const", ints[base[h[1]] + h[2]], h[3])
-                     for h in self.row_hints]
-        elif owner:
-            hints = [h if h[0] == "none" else
-                     ("pair", owner + h[1], owner + h[2], h[3]) if h[0] == "pair"
-                     else ("const", owner + h[1], h[2]) for h in self.hints]
-        else:
-            hints = self.root_hints
-        first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
-        last = first + len(hints)
-        flat.equations += [_TemplateEquation(self, owner, hint, row) for row, hint
-                           in zip(_integers(shared, last - 1)[first:last], hints)]
+            h = self.row_hints[k]
+            return h if h[0] == "none" else \
+                ("pair", base[h[1]] + h[2], base[h[3]] + h[4], h[5]) if h[0] == "pair" \
+                else ("const", base[h[1]] + h[2], h[3])
+        owner = self.paths[instance]
+        if not owner:
+            return self.root_hints[k]
+        h = self.hints[k]
+        return h if h[0] == "none" else ("pair", owner + h[1], owner + h[2], h[3]) \
+            if h[0] == "pair" else ("const", owner + h[1], h[2])
+
+    def hint_arrays(self) -> tuple:
+        """The alias hints of every row (see `hint`) as arrays ``(tag, a, b, s)``: tag 0
+        for none, 1 for a pair ``a == s*b``, 2 for a constant ``a == s`` (a, b variable
+        numbers), 3 for a hint by path (read with `hint`, row by row)."""
+        n, m = len(self.paths), self.n_eq
+        tag = np.zeros((n, m), dtype=np.int8)
+        a = np.zeros((n, m), dtype=np.int64)
+        b = np.zeros((n, m), dtype=np.int64)
+        s = np.zeros((n, m))
+        numbered = np.zeros(n, dtype=bool)
+        if self.row_hints is not None:
+            bases = np.array(self.bases, dtype=np.int64).reshape(n, -1)
+            numbered = (bases[:, self.row_bases] >= 0).all(axis=1)
+            for k, h in enumerate(self.row_hints):
+                if h[0] == "pair":
+                    tag[:, k] = 1
+                    a[:, k], b[:, k] = bases[:, h[1]] + h[2], bases[:, h[3]] + h[4]
+                    s[:, k] = h[5]
+                elif h[0] == "const":
+                    tag[:, k] = 2
+                    a[:, k], s[:, k] = bases[:, h[1]] + h[2], h[3]
+        by_path = [k for k, h in enumerate(self.hints) if h[0] != "none"]
+        if by_path and not numbered.all():
+            tag[np.ix_(~numbered, by_path)] = 3
+        return tag.ravel(), a.ravel(), b.ravel(), s.ravel()
 
     def defer(self, flat: FlatModel) -> None:
         """Leave the instances' residuals unformed until something reads them: alias
@@ -2986,7 +3206,7 @@ def _discrete_declarations(flat: FlatModel, elements, problems) -> None:
     """
     ctx = flat.context
     # the equations der(v) == 0 of `_discrete_states`, which only event actions add
-    for eq in flat.equations if flat.events else ():
+    for eq in _held(flat.equations) if flat.events else ():
         if isinstance(eq.origin, str) and eq.origin.endswith("changed only by events)"):
             name = ctx.integral.get(eq.residual.name()) if eq.residual.is_symbolic() else None
             if name:
