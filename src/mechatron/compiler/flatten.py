@@ -819,6 +819,16 @@ class FlatEquations(MutableSequence):
         self.rows.append(len(self.given))
         self.given.append(value)
 
+    def extend(self, values) -> None:
+        if self.plain is not None:
+            self.plain.extend(values)
+            return
+        values = list(values)
+        n = len(self.given)
+        self.which += repeat(-1, len(values))
+        self.rows += range(n, n + len(values))
+        self.given += values
+
     def __iter__(self):
         if self.plain is not None:
             return iter(self.plain)
