@@ -34,7 +34,8 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.graph import maximum_matching
-from mechatron.compiler.graph.elimination import LinearElimination, exact, exact_elimination
+from mechatron.compiler.graph.elimination import (LinearElimination, SparseRows, exact,
+                                                  exact_elimination)
 from mechatron.compiler.graph.matching import augment_from
 from mechatron.compiler.graph.polynomial import Laurent, atom
 from mechatron.errors import StructuralError
@@ -312,15 +313,12 @@ class _Columns:
         return rows * n_col + self._cols
 
 
-def _linear_rows(n: int, rows: np.ndarray, cols: np.ndarray, coefs: list) -> list[dict]:
+def _linear_rows(n: int, rows: np.ndarray, cols: np.ndarray, coefs: list) -> SparseRows:
     """``linear[e]``: column -> coefficient of the entries ``(rows, cols, coefs)``, each
-    row's in the order given (one dictionary per equation, made from slices)."""
+    row's in the order given (held as arrays, a dictionary formed per row read)."""
     order = np.argsort(rows, kind="stable")
-    ptr = np.searchsorted(rows[order], np.arange(n + 1)).tolist()
-    col = cols[order].tolist()
-    coef = [coefs[k] for k in order.tolist()]
-    return [dict(zip(col[a:b], coef[a:b])) if a != b else {}
-            for a, b in zip(ptr, ptr[1:])]
+    ptr = np.searchsorted(rows[order], np.arange(n + 1))
+    return SparseRows(ptr, cols[order], [coefs[k] for k in order.tolist()])
 
 
 def _purely_linear(adj, eliminable, const: _Columns, n_col: int) -> list[int]:

@@ -40,7 +40,7 @@ import numpy as np
 
 from mechatron.compiler.graph.polynomial import Laurent
 
-__all__ = ["LinearElimination", "exact_elimination", "exact"]
+__all__ = ["LinearElimination", "SparseRows", "exact_elimination", "exact"]
 
 Coefficient = int | Fraction | Laurent
 
@@ -120,6 +120,89 @@ class LinearElimination:
         return self._memo[e]
 
 
+class SparseRows(Sequence):
+    """Rows ``{column: coefficient}`` held as arrays (compressed rows: row ``e`` holds
+    ``cols[ptr[e]:ptr[e + 1]]`` with ``coefs`` at the same places, each column once, as
+    a dictionary holds it), each formed as a dictionary when read, not all at once;
+    `exact_elimination` reads the columns of the rows as arrays."""
+
+    __slots__ = ("ptr", "cols", "coefs")
+
+    def __init__(self, ptr: np.ndarray, cols: np.ndarray, coefs: list):
+        self.ptr, self.cols, self.coefs = ptr, cols, coefs
+
+    def __len__(self) -> int:
+        return len(self.ptr) - 1
+
+    def __getitem__(self, e):
+        if isinstance(e, slice):
+            return [self[k] for k in range(*e.indices(len(self)))]
+        if e < 0:
+            e += len(self)
+        if not 0 <= e < len(self):
+            raise IndexError("row index out of range")
+        a, b = int(self.ptr[e]), int(self.ptr[e + 1])
+        return dict(zip(self.cols[a:b].tolist(), self.coefs[a:b])) if a != b else {}
+
+
+def _column_singles(linear: SparseRows, ok: list, rows: Sequence[int],
+                    n_var: int) -> dict[int, int] | None:
+    """The pivots of `exact_elimination` (in the order it takes them) when each is a
+    column left in a single active equation, so that no equation is updated (a
+    tree-like network: every current law and branch relation a pivot); None when some
+    other pivot would follow. The same steps as `exact_elimination`'s first branch, on
+    the rows' columns as arrays: the columns held by one active equation on a stack
+    (the lowest first), each pivot retiring its equation and pushing the columns it
+    leaves held by one."""
+    ptr, cols = linear.ptr, linear.cols
+    taking = np.asarray(rows, dtype=np.int64)
+    if not len(taking):
+        return {}
+    if not all(linear.coefs):
+        return None                 # an exact zero: a column that is not there
+    lengths = ptr[taking + 1] - ptr[taking]
+    total = int(lengths.sum())
+    # the entries of the rows taking part, row after row
+    at = np.repeat(ptr[taking] - np.cumsum(lengths) + lengths, lengths) + \
+        np.arange(total, dtype=np.int64)
+    col = cols[at]
+    eligible = np.asarray(ok, dtype=bool)[col] if total else np.zeros(0, dtype=bool)
+    col = col[eligible]
+    row = np.repeat(taking, lengths)[eligible]
+    count = np.bincount(col, minlength=n_var)
+    active = np.zeros(len(linear), dtype=np.int8)
+    active[taking] = 1
+    if int(active.sum()) != len(taking):
+        return None                 # a row taking part twice
+    # each column's rows
+    by_col = np.argsort(col, kind="stable")
+    col_rows = row[by_col].tolist()
+    col_ptr = np.searchsorted(col[by_col], np.arange(n_var + 1)).tolist()
+    stack = np.flatnonzero(count == 1)[::-1].tolist()
+    left = count.tolist()           # active equations holding each column, -1: pivoted
+    active = bytearray(active.tobytes())
+    ptr_l, cols_l = ptr.tolist(), cols.tolist()
+    pivots: dict[int, int] = {}
+    while stack:
+        v = stack.pop()
+        if left[v] != 1:
+            continue
+        k = col_ptr[v]
+        e = col_rows[k]
+        while not active[e]:
+            k += 1
+            e = col_rows[k]
+        pivots[e] = v
+        left[v] = -1
+        active[e] = 0
+        for u in cols_l[ptr_l[e]:ptr_l[e + 1]]:
+            if ok[u] and left[u] > 0:
+                left[u] -= 1
+                if left[u] == 1:
+                    stack.append(u)
+    return pivots if max(left, default=0) <= 0 else None
+
+
 def exact_elimination(linear: Sequence[Mapping[int, Rational]],
                       eliminable: Sequence[bool], *,
                       rows: Sequence[int] | None = None) -> LinearElimination:
@@ -164,7 +247,17 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
     """
     n_var = len(eliminable)
     ok = [bool(x) for x in eliminable]
-    _check_columns(linear, n_var)
+    if type(linear) is SparseRows and rows is not None:
+        _check_sparse_columns(linear, n_var)
+        pivots = _column_singles(linear, ok, rows, n_var)
+        if pivots is not None:      # no equation updated: the others as given
+            kept = [linear[e] for e in rows if e not in pivots]
+            return LinearElimination(
+                pivots=pivots,
+                rows={e: row if all(row.values()) else {v: a for v, a in row.items() if a}
+                      for e, row in zip([e for e in rows if e not in pivots], kept)})
+    else:
+        _check_columns(linear, n_var)
     if rows is None:
         rows = [e for e, row in enumerate(linear) if any(ok[v] for v in row)]
     work: dict[int, dict[int, Coefficient]] = {}
@@ -295,6 +388,16 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         pivot(e, chosen)
     reduced = {e: work[e] for e in rows if e not in pivots}
     return LinearElimination(pivots=pivots, rows=reduced, updates=updates)
+
+
+def _check_sparse_columns(linear: SparseRows, n_var: int) -> None:
+    """`_check_columns` on the rows' arrays."""
+    cols = linear.cols
+    if len(cols) and (cols.min() < 0 or cols.max() >= n_var):
+        bad = int(np.flatnonzero((cols < 0) | (cols >= n_var))[0])
+        e = int(np.searchsorted(linear.ptr, bad, side="right")) - 1
+        raise ValueError(f"equation {e} names column {int(cols[bad])}, outside 0 .. "
+                         f"{n_var - 1}.")
 
 
 def _check_columns(linear: Sequence[Mapping[int, Rational]], n_var: int) -> None:
