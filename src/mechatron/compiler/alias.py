@@ -518,13 +518,10 @@ def _kept_residuals(kept: EquationRows, pending: list, flat,
     if not len(rest_at):
         rest = None
     else:
-        templates, which, rows_of = kept.templates, kept.which, kept.rows
-        items = [(None, None)] * len(rest_at)
-        for j, k in enumerate(rest_at.tolist()):
-            t = which[k]
-            items[j] = _row_of(templates[t], int(rows_of[k])) if t >= 0 else \
-                _residual_of(kept.objects[rows_of[k]])
-        rest = _gather(items)
+        templates, objects = kept.templates, kept.objects
+        rest = _gather([_row_of(templates[t], r) if t >= 0 else _residual_of(objects[r])
+                        for t, r in zip(kept.which[rest_at].tolist(),
+                                        kept.rows[rest_at].tolist())])
         if replaced is not None:
             rest = ca.substitute(rest, replaced.old, replaced.new)
     if not place:                   # no template formed here: every residual is rest
