@@ -1491,6 +1491,14 @@ def _integers(shared: list, top: int):
     return shared if top < len(shared) else range(top + 1)
 
 
+def _parameter_rows(syms) -> list | None:
+    """The rows of an element's parameters in the column of the parameters (-1 for one
+    bound to an expression), kept on its symbols (``_ColumnSyms.par_rows``, the list
+    ``flat._parameter_rows`` holds by ``id``, read here without a lookup in a dictionary
+    of every element); None if it has none."""
+    return (syms.par_rows or None) if type(syms) is _ColumnSyms else None
+
+
 def _first_row(el, late: dict) -> int:
     """The row of ``el``'s first variable among the model's variables: kept on its
     symbols when bound in bulk (`_bind_symbols`), else in ``late`` (``flat._rows``,
@@ -2108,8 +2116,7 @@ class _Template:
             ints = _integers(shared, column.numel() - 1)
             # and each parameter slot laid out as bound (`par_slots`, the first ones)
             # the parameter's row in the column of the parameters, if it has one
-            prows = state.get("_parameter_rows", {}).get(id(el)) if self.par_slots \
-                else None
+            prows = _parameter_rows(syms) if self.par_slots else None
             k = len(self.par_slots) if prows is not None else 0
             args = [ints[base[w] + x] if is_var else
                     prows[i] if i < k and prows[i] >= 0 else own[w][x]
@@ -2146,7 +2153,8 @@ class _Template:
         self.instances.append(args)
         self.paths.append(owner)
         if self.par_slots:
-            self.par_bases.append(state.get("_parameter_rows", {}).get(id(el), -1))
+            prows = _parameter_rows(syms)
+            self.par_bases.append(-1 if prows is None else prows)
         first = (len(self.instances) - 1) * self.n_eq     # this instance's first row
         if self.n_eq:
             equations = flat.equations
