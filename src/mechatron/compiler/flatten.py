@@ -1205,9 +1205,6 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
             el._syms = None
             el._path_cache = None
     flat.__dict__.pop("_ints", None)     # its integers live on where they are held
-    # each element's parameter rows: read by binding and by the class templates' instances
-    # (`_Template.add`), by nothing after (a list per element with parameters)
-    flat.__dict__.pop("_parameter_rows", None)
     if problems:
         raise problems.error_class()(_summary(name, problems), problems=list(problems),
                                      path=name)
@@ -1319,10 +1316,11 @@ class _ColumnSyms(dict):
     expression of its parent's is held as bound). A class template's instance never
     reads them one by one (`_Template.add` takes their rows). ``row`` is the row of its
     first variable among the model's variables (`_first_row`); an element with
-    parameters alone has no ``column`` and the row -1."""
+    parameters alone has no ``column`` and the row -1. ``par_values`` holds its
+    parameters' values while flattening, for its parts' bindings (`_bind_expression`)."""
 
     __slots__ = ("column", "base", "offsets", "row", "par_store", "par_rows",
-                 "par_places")
+                 "par_places", "par_values")
 
     def __missing__(self, key):
         at = self.offsets.get(key)
@@ -1361,7 +1359,6 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     column of the variables is kept as `FlatModel.stack_variables`' column, and the row
     of each element's first variable in it on the element's symbols (`_first_row`)."""
     ctx = flat.context
-    values: dict[int, dict[str, float]] = {}     # id(component) -> parameter values
     variables, parameters = flat.variables, flat.parameters
     shared = (flat, folded, problems)
     par_names: list[str] = []
@@ -1395,9 +1392,6 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     # by the element's symbols and the record; all at once when many are read alone
     # (passed on to parts, R=R: each read alone costs 5 us)
     par_store = ColumnRows(par_column)
-    # id -> the row of each parameter in the column, in declaration order: its own, or
-    # for a parameter passed on unchanged (R=R) its parent's; -1 for an expression
-    par_rows = flat.__dict__["_parameter_rows"] = {}
     var_column = _symbols(var_names, split=False)[0]
     # the integers 0 .. n-1 as objects, once: the records' rows, and every row or
     # number that flattening keeps later (an element's first row, a template instance's
@@ -1419,13 +1413,17 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
     pi = vi = 0
     for el, params, plain, offsets in bound:
         if params:
-            own_values = values[id(el)] = {}
+            own_values = {}         # its parameters' values, read by its parts'
             # each parameter's symbol read from the column on first read
             syms = _ColumnSyms()
             owner = el._parent if isinstance(el, Connector) else el
             owner_path = owner._path_cache if owner is not None else ""
-            el_rows = par_rows[id(el)] = list(range(pi, pi + len(params)))
+            # the row of each parameter in the column, in declaration order: its own,
+            # or for a parameter passed on unchanged (R=R) its parent's; -1 for an
+            # expression
+            el_rows = list(range(pi, pi + len(params)))
             syms.par_store, syms.par_rows = par_store, el_rows
+            syms.par_values = own_values
             syms.par_places = _parameter_places(type(el))
             for j, (key, decl) in enumerate(params):
                 path = par_names[pi]
@@ -1434,7 +1432,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
                 raw = el._values.get(key, decl.default)
                 if isinstance(raw, ParameterExpression):
                     sym, own_values[key], el_rows[j] = _bind_expression(
-                        flat, el, key, decl, raw, values, problems, par_rows, par_store)
+                        flat, el, key, decl, raw, problems, par_store)
                     if sym is not None:     # else read from the column by its row
                         syms[key] = sym
                     continue
@@ -1457,6 +1455,7 @@ def _bind_symbols(flat: FlatModel, elements, problems, folded=None) -> None:
         elif plain:
             syms = _ColumnSyms()
             syms.par_store, syms.par_rows, syms.par_places = None, (), _NO_PLACES
+            syms.par_values = None
         else:
             syms = {}
         if plain:
@@ -1493,9 +1492,8 @@ def _integers(shared: list, top: int):
 
 def _parameter_rows(syms) -> list | None:
     """The rows of an element's parameters in the column of the parameters (-1 for one
-    bound to an expression), kept on its symbols (``_ColumnSyms.par_rows``, the list
-    ``flat._parameter_rows`` holds by ``id``, read here without a lookup in a dictionary
-    of every element); None if it has none."""
+    bound to an expression), kept on its symbols (``_ColumnSyms.par_rows``: no
+    dictionary of every element keyed by ``id``); None if it has none."""
     return (syms.par_rows or None) if type(syms) is _ColumnSyms else None
 
 
@@ -1714,7 +1712,7 @@ def _binding_plan(cls):
         dict(zip(var_keys, range(len(var_keys))))
 
 
-def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows, store):
+def _bind_expression(flat, el, key, decl, expr, problems, store):
     """Bind ``el.key`` to an expression of its parent's parameters: the symbol is the
     expression of the parent's symbols, the value its value; units must agree. Returns
     ``(symbol, value, row)``: ``row`` is the parent parameter's row in the parameter
@@ -1738,11 +1736,11 @@ def _bind_expression(flat, el, key, decl, expr, values, problems, par_rows, stor
     if message:
         problems.add(UnitError, f"{_binding_where(el, key, expr)}: {message}")
         return ca.SX.nan(), float("nan"), -1
-    pvals = values.get(id(parent), {})
+    pvals = getattr(parent._syms, "par_values", None) or {}
     row = -1
     if name is not None:            # R=R: the parent's symbol and value themselves
         value = float(pvals.get(name, float("nan")))
-        rows = par_rows.get(id(parent))
+        rows = _parameter_rows(parent._syms)
         if rows is not None:
             row = rows[_parameter_places(type(parent))[name]]
         if row >= 0:
