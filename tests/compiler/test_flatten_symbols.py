@@ -648,3 +648,24 @@ def test_the_passed_on_model_follows_its_circuit():
     assert res.final("leak.p.i") == pytest.approx(0.2, rel=1e-6)
     assert res.final("pair.second.c.v") == pytest.approx(0.4, rel=1e-6)
     assert res.final("pair.first.r.i") == pytest.approx(0.2, rel=1e-6)
+
+
+def test_the_components_are_held_as_lists_until_read_by_path(monkeypatch):
+    """`FlatModel.components` (path -> class name) is made a dictionary only when read:
+    a compile does not read it; read, it names every component of the tree."""
+    import mechatron.compiler.pipeline as pipeline
+    model = ladder(30)
+    want = {el.path: type(el).__name__ for el in fl._walk(model)
+            if isinstance(el, mt.Component)}
+    flat = fl.flatten(ladder(30))
+    comps = flat.components
+    assert comps._dict is None and len(comps) == len(want) and comps
+    kept = {}
+    monkeypatch.setattr(pipeline, "flatten",
+                        lambda *a, **k: kept.setdefault("flat", fl.flatten(*a, **k)))
+    mt.compile_model(ladder(30))
+    assert kept["flat"].components._dict is None
+    assert comps["r3"] == want["r3"] and dict(comps) == want
+    comps["extra"] = "Thing"
+    comps.add("more", "Other")
+    assert len(comps) == len(want) + 2 and comps["more"] == "Other"

@@ -446,6 +446,52 @@ class _NamedRecordsView(ItemsView):
         return zip(self._mapping._names, self._mapping.records())
 
 
+class _Components(MutableMapping):
+    """`FlatModel.components`, path -> class name, held as two lists in tree order (a
+    path and a name per component, appended by flattening) and made a dictionary only
+    when something reads it: messages and reports read a few, and entering every path
+    of 10^5 components costs more per entry the more there are."""
+
+    __slots__ = ("_paths", "_names", "_dict")
+
+    def __init__(self):
+        self._paths: list = []
+        self._names: list = []
+        self._dict: dict | None = None
+
+    def _formed(self) -> dict:
+        if self._dict is None:
+            self._dict = dict(zip(self._paths, self._names))
+            self._paths = self._names = None
+        return self._dict
+
+    def add(self, path: str, name: str) -> None:
+        """``self[path] = name`` for a path not in it yet, without forming the dictionary."""
+        if self._dict is None:
+            self._paths.append(path)
+            self._names.append(name)
+        else:
+            self._dict[path] = name
+
+    def __getitem__(self, path):
+        return self._formed()[path]
+
+    def __setitem__(self, path, name) -> None:
+        self._formed()[path] = name
+
+    def __delitem__(self, path) -> None:
+        del self._formed()[path]
+
+    def __iter__(self):
+        return iter(self._formed())
+
+    def __len__(self) -> int:
+        return len(self._paths) if self._dict is None else len(self._dict)
+
+    def __repr__(self) -> str:
+        return repr(self._formed())
+
+
 class _RowsOf:
     """Variable name -> its row in the column of all variables, read off the records
     (`_ColumnVariable.row`) when every variable was bound in bulk: no second dictionary
@@ -979,7 +1025,7 @@ class FlatModel:
     variables: MutableMapping[str, FlatVariable] = field(default_factory=_Variables)
     equations: MutableSequence = field(default_factory=FlatEquations)
     aliases: list[tuple[str, str, float, str]] = field(default_factory=list)
-    components: dict[str, str] = field(default_factory=dict)  # path -> class name
+    components: MutableMapping = field(default_factory=_Components)  # path -> class name
     #: the class of every element of the tree (a pass that few classes need skips the
     #: walk over the elements when none of them is there)
     classes: frozenset = frozenset()
@@ -1172,7 +1218,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     flat = FlatModel(name=name, context=BuildContext())
     problems = _Problems()
     elements = list(_walk(model))
-    components = flat.components
+    add_component = flat.components.add
     # each class met: whether its elements declare discrete variables or write initial
     # equations (`_discrete_declarations` reads those elements alone, picked here)
     marked: dict[type, bool] = {}
@@ -1189,7 +1235,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
             if el._partial and el is not model:
                 problems.append(f"{el.describe()}: {cls.__name__} is a partial "
                                 "class (an interface); use a concrete component.")
-            components[el._path_cache] = cls.__name__
+            add_component(el._path_cache, cls.__name__)
             parts.append(el)
     flat.classes = frozenset(marked)
     planned, folded = plan_subsystems(model, parts)
