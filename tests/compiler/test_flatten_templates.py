@@ -605,3 +605,38 @@ def test_alias_elimination_on_numbers_equals_it_on_the_equations(build):
     assert [str(o) for o in a.origins] == [str(o) for o in b.origins]
     assert [str(r) for r in ca.vertsplit(a.stacked)] == \
         [str(r) for r in ca.vertsplit(b.stacked)]
+
+
+def _formed_at_once(monkeypatch):
+    """Each template row formed as an object when its instance is added, its hint read
+    then (the equations held as objects, as before `FlatEquations` held numbers)."""
+    monkeypatch.setattr(fl.FlatEquations, "add_rows",
+                        lambda self, tpl, first, last, ints:
+                        self.extend(map(tpl.equation, range(first, last))))
+
+
+def deep_ladder():
+    from tests.compiler.test_folding import deep_ladder as build
+    return build()
+
+
+def two_drives():
+    from tests.compiler.test_folding import two_drives as build
+    return build()
+
+
+@pytest.mark.parametrize("build", [reading_model, deep_ladder, two_drives])
+def test_hints_held_as_numbers_follow_variables_put_back_in_place(build, monkeypatch):
+    """Variables of ports bound on first read are put back where they are declared
+    (`_declaration_order`), which renumbers them: the hints a template's rows give by
+    number then follow their variables, as the hints formed at once and renumbered one
+    by one do (the same classes and kept equations after alias elimination)."""
+    flat = fl.flatten(build())
+    assert any(t >= 0 for t in flat.equations.which)
+    a = eliminate_aliases(flat)
+    _formed_at_once(monkeypatch)
+    b = eliminate_aliases(fl.flatten(build()))
+    assert a.unknowns == b.unknowns and dict(a.eliminated) == dict(b.eliminated)
+    assert [str(o) for o in a.origins] == [str(o) for o in b.origins]
+    assert [str(r) for r in ca.vertsplit(a.stacked)] == \
+        [str(r) for r in ca.vertsplit(b.stacked)]

@@ -185,6 +185,10 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
             hint = _read_alias(eq.residual, unknowns)
             if hint is None:
                 return False
+        return recorded(hint)
+
+    def recorded(hint) -> bool:
+        """Whether the alias ``hint`` is recorded now (see `absorbed`)."""
         tag = hint[0]
         if tag == "pair":
             a, b = hint[1], hint[2]
@@ -201,7 +205,7 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
     if numbered is None:
         kept = EquationRows.of(redundant + [eq for eq in equations if not absorbed(eq)])
     else:
-        kept = _scan(equations, numbered, redundant, union, fix, absorbed)
+        kept = _scan(equations, numbered, redundant, union, fix, absorbed, recorded)
     origins = Origins(kept)                 # each formed when read (messages)
     owners = _owners(kept)
     n_before = len(flat.equations) + len(flat.aliases)
@@ -230,12 +234,13 @@ def eliminate_aliases(flat: FlatModel) -> AliasResult:
 
 
 def _scan(equations: FlatEquations, numbered: tuple, redundant: list, union, fix,
-          absorbed) -> EquationRows:
+          absorbed, recorded) -> EquationRows:
     """Alias elimination over the equations as `FlatEquations` holds them: the alias
     hints of the class templates' rows read as arrays (`flatten._Template.hint_arrays`),
-    each pair and constant recorded in the equations' order (``union``, ``fix``), any
-    other equation read one by one (``absorbed``). The equations kept, after
-    ``redundant``."""
+    each pair and constant recorded in the equations' order (``union``, ``fix``), a
+    template's row whose hint names its variables by path read alone (``recorded``,
+    no equation formed), any other equation read one by one (``absorbed``). The
+    equations kept, after ``redundant``."""
     which, rows = numbered
     n = len(which)
     tag = np.full(n, 3, dtype=np.int8)       # 3: read one by one
@@ -248,21 +253,21 @@ def _scan(equations: FlatEquations, numbered: tuple, redundant: list, union, fix
         tag[places], a[places], b[places], s[places] = t_tag[r], t_a[r], t_b[r], t_s[r]
     keep = tag == 0
     look = np.flatnonzero(~keep)
-    formed = False
-    for k, g, x, y, f in zip(look.tolist(), tag[look].tolist(), a[look].tolist(),
-                             b[look].tolist(), s[look].tolist()):
+    templates = equations.templates
+    for k, g, x, y, f, t, r in zip(look.tolist(), tag[look].tolist(), a[look].tolist(),
+                                   b[look].tolist(), s[look].tolist(),
+                                   which[look].tolist(), rows[look].tolist()):
         if g == 1:
             if not union(x, y, f):
                 keep[k] = True
         elif g == 2:
             if not fix(x, f):
                 keep[k] = True
-        else:
-            formed = formed or which[k] >= 0       # a template's row by path: formed
-            if not absorbed(equations[k]):
+        elif t >= 0:                # a template's row whose hint names paths
+            if not recorded(templates[t].hint(r)):
                 keep[k] = True
-    if formed:
-        which, rows = equations.numbered()
+        elif not absorbed(equations[k]):
+            keep[k] = True
     places = np.flatnonzero(keep)
     which, rows = which[places], rows[places]
     given = equations.given

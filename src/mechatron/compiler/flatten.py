@@ -1297,7 +1297,15 @@ def _declaration_order(flat: FlatModel) -> None:
         flat.__dict__["_derivative_rows"] = {n: moved_to[r] for n, r in der_rows.items()}
     if der_bulk:
         flat.__dict__["_derivative_bulk"] = [(moved_to[r], k) for r, k in der_bulk]
-    for eq in flat.equations:
+    equations = flat.equations
+    if type(equations) is FlatEquations and equations.plain is None:
+        # the templates' rows give their hints from their instances' first rows
+        # (`_Template.hint`): an element's variables move together, so its first row
+        # moves them all
+        for tpl in equations.templates:
+            tpl.bases = [moved_to[b] if b >= 0 else b for b in tpl.bases]
+        equations = equations.held()
+    for eq in equations:
         hint = eq.alias
         if hint is not None and hint[0] != "none" and type(hint[1]) is int:
             eq.alias = (hint[0], moved_to[hint[1]], moved_to[hint[2]], hint[3]) \
