@@ -251,11 +251,8 @@ def exact_elimination(linear: Sequence[Mapping[int, Rational]],
         _check_sparse_columns(linear, n_var)
         pivots = _column_singles(linear, ok, rows, n_var)
         if pivots is not None:      # no equation updated: the others as given
-            kept = [linear[e] for e in rows if e not in pivots]
-            return LinearElimination(
-                pivots=pivots,
-                rows={e: row if all(row.values()) else {v: a for v, a in row.items() if a}
-                      for e, row in zip([e for e in rows if e not in pivots], kept)})
+            return LinearElimination(pivots=pivots, rows={
+                e: linear[e] for e in rows if e not in pivots})
     else:
         _check_columns(linear, n_var)
     if rows is None:
