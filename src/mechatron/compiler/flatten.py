@@ -21,6 +21,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from mechatron.compiler.folding import join_planned, plan_subsystems
+from mechatron.compiler.graph.arrays import segments as _segments
 from mechatron.compiler.nodes import _PARENT, joined_nodes, physical_nodes, planned_nodes
 from mechatron.core.component import Component, Connect, Connector, Element, SignalRef
 from mechatron.core.connections import connection_sets, is_driver, port_key
@@ -546,16 +547,6 @@ class FoldedColumns:
 def _offsets(counts: np.ndarray) -> np.ndarray:
     """Compressed-row pointers (as a CSR matrix's) of segments of ``counts`` entries."""
     return np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
-
-
-def _segments(ptr: np.ndarray, take: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For the segments ``take`` of compressed rows ``ptr`` (as a CSR matrix's), in that
-    order: the place of each of their entries among all entries, and the index into
-    ``take`` of the segment each one belongs to."""
-    counts = ptr[take + 1] - ptr[take]
-    owner = np.repeat(np.arange(take.size), counts)
-    within = np.arange(owner.size) - np.repeat(np.cumsum(counts) - counts, counts)
-    return ptr[take][owner] + within, owner
 
 
 @dataclass(slots=True)
@@ -2062,7 +2053,7 @@ class _Template:
                  "n_eq", "aliases", "relative", "var_slots", "paths",
                  "var_rows", "bases", "hints", "root_hints", "par_slots", "par_bases",
                  "row_hints", "row_bases", "column", "var_column", "model_name",
-                 "slots", "slot_keys", "der_rows", "der_column", "row_span", "par_column",
+                 "slots", "slot_keys", "der_rows", "der_column", "par_column",
                  "pending", "replaced", "first")
 
     def __init__(self, keys, ports, derived, syms, lhs, rhs, variables, var_rows=None,
@@ -2141,8 +2132,6 @@ class _Template:
                               if p[0] == "pair" else ("const", *var_rows[p[1]], p[2])
                               for p in self.aliases]
             self.row_bases = sorted({var_rows[i][0] for i in read})    # bases read
-            # the largest row after its base a hint reads
-            self.row_span = max(var_rows[i][1] for i in read) if read else 0
 
     def add(self, flat: FlatModel, el, ders=None) -> None:
         """Add the instance ``el``; ``ders`` holds derivative symbols made beforehand

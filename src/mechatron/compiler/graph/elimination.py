@@ -38,6 +38,7 @@ from numbers import Rational
 
 import numpy as np
 
+from mechatron.compiler.graph.arrays import segments
 from mechatron.compiler.graph.polynomial import Laurent
 
 __all__ = ["LinearElimination", "SparseRows", "exact_elimination", "exact"]
@@ -160,15 +161,11 @@ def _column_singles(linear: SparseRows, ok: list, rows: Sequence[int],
         return {}
     if not all(linear.coefs):
         return None                 # an exact zero: a column that is not there
-    lengths = ptr[taking + 1] - ptr[taking]
-    total = int(lengths.sum())
-    # the entries of the rows taking part, row after row
-    at = np.repeat(ptr[taking] - np.cumsum(lengths) + lengths, lengths) + \
-        np.arange(total, dtype=np.int64)
+    at, owner = segments(ptr, taking)   # the entries of the rows taking part, in order
     col = cols[at]
-    eligible = np.asarray(ok, dtype=bool)[col] if total else np.zeros(0, dtype=bool)
+    eligible = np.asarray(ok, dtype=bool)[col] if len(col) else np.zeros(0, dtype=bool)
     col = col[eligible]
-    row = np.repeat(taking, lengths)[eligible]
+    row = taking[owner][eligible]
     count = np.bincount(col, minlength=n_var)
     active = np.zeros(len(linear), dtype=np.int8)
     active[taking] = 1
