@@ -253,7 +253,7 @@ def _scan(equations: FlatEquations, numbered: tuple, redundant: list, union, fix
         tag[places], a[places], b[places], s[places] = t_tag[r], t_a[r], t_b[r], t_s[r]
     keep = tag == 0
     look = np.flatnonzero(~keep)
-    templates = equations.templates
+    templates, given = equations.templates, equations.given
     for k, g, x, y, f, t, r in zip(look.tolist(), tag[look].tolist(), a[look].tolist(),
                                    b[look].tolist(), s[look].tolist(),
                                    which[look].tolist(), rows[look].tolist()):
@@ -266,11 +266,10 @@ def _scan(equations: FlatEquations, numbered: tuple, redundant: list, union, fix
         elif t >= 0:                # a template's row whose hint names paths
             if not recorded(templates[t].hint(r)):
                 keep[k] = True
-        elif not absorbed(equations[k]):
+        elif not absorbed(given[r]):   # an equation held as an object
             keep[k] = True
     places = np.flatnonzero(keep)
     which, rows = which[places], rows[places]
-    given = equations.given
     held = which < 0
     objects = redundant + [given[r] for r in rows[held].tolist()]
     m = len(redundant)
