@@ -45,6 +45,8 @@ MAX_STEPS = 20_000_000
 TRANSPORTS = ("sim", "udp", "pty")
 #: Exit code of ``mt_sil`` (and of ``mechatron hil``) when the overrun budget is exceeded.
 EXIT_OVER_BUDGET = 3
+#: A run of consecutive steps without an exchange this long (s) is reported as a stall.
+STALL_S = 0.01
 
 
 class OverrunWarning(RuntimeWarning):
@@ -94,6 +96,20 @@ class HILResult:
             return False
         return self.runner["overruns"] > self.max_overruns * max(self.runner["steps"], 1)
 
+    @property
+    def longest_gap(self) -> int:
+        """The longest run of consecutive steps in which the plant got no duty from the
+        controller (``got`` = 0 in the log). The ordinary overruns of a kept schedule are
+        single steps here and there; a long run is a stall (the host paused the loop,
+        or the controller stopped answering), through which the plant ran on with the
+        duty held: the comparison with MIL then measures the stall as well."""
+        got = self.log.get("got")
+        if got is None or got.size == 0:
+            return 0
+        lost = np.concatenate(([0], (got == 0).astype(np.int8), [0]))
+        edges = np.flatnonzero(np.diff(lost))       # starts and ends of the runs, in turn
+        return int((edges[1::2] - edges[::2]).max()) if edges.size else 0
+
     def summary(self) -> dict:
         """The JSON summary of ``mechatron hil --json`` (every figure a number, a bool or
         a string: a figure that was not measured is left out, never null)."""
@@ -111,6 +127,7 @@ class HILResult:
                                    "controller": self.controller.get("dropped_on_purpose",
                                                                      0)},
             "controller_lost_samples": self.controller.get("lost_samples", 0),
+            "longest_gap_steps": self.longest_gap,
             **({"reply_timeout_s": r["reply_timeout_s"]} if "reply_timeout_s" in r else {}),
             "rms_diff_percent": self.comparison["rms_diff_percent"],
             "peak_diff_percent": self.comparison["peak_diff_percent"],
@@ -326,6 +343,13 @@ def run_hil(name: str = "speed", *, mode: str = "sil", duration: float = 2.0,
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
     res.max_overruns = max_overruns
+    gap = res.longest_gap
+    if not lockstep and mode == "sil" and gap > 1 and gap >= STALL_S * rate:
+        res.notes.append(f"the plant went {gap} consecutive steps ({1e3 * gap / rate:.3g} "
+                         "ms) without a duty from the controller: the loop stalled (the "
+                         "host paused it, or the controller stopped answering) and the "
+                         "plant ran on with the duty held, so the comparison with MIL "
+                         "measures that stall as well")
     if res.over_budget:
         msg = (f"hil {name}: {res.runner['overruns']} overruns in {res.runner['steps']} "
                f"steps ({100 * res.runner['overruns'] / res.runner['steps']:.3g} %) exceed "
