@@ -1953,7 +1953,9 @@ def _collect_equations(flat: FlatModel, elements, problems,
     for el in elements:
         if isinstance(el, Component):
             if planned and id(el) in planned:
-                components.append((el, None, True))
+                # wired by its class's plan (folding): met below only for its time scales
+                if planned[id(el)][1].has_time_scales:
+                    components.append((el, None, True))
             else:
                 components.append((el, _template(flat, el, templates), False))
     ders = _template_derivatives(components)
@@ -1961,9 +1963,8 @@ def _collect_equations(flat: FlatModel, elements, problems,
         flat.__dict__["_derivative_column"] = (ders.column, ders.syms)
     for el, tpl, is_planned in components:
         where = el._path_cache or flat.name
-        if is_planned:                      # wired by its class's plan (folding)
-            if planned[id(el)][1].has_time_scales:
-                flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
+        if is_planned:                      # a planned instance with time scales
+            flat.time_scales.extend(ca.SX(s) for s in el.time_scales())
             continue
         if tpl is not None:
             if "equations" in vars(type(el)) and _has_time_scales(type(el)):
