@@ -93,7 +93,9 @@ def plan_subsystems(model: Component, components) -> tuple[dict, dict]:
         if any(map(_STARTS, ports)):
             continue                    # a start value on a port: written out
         planned[id(el)] = (el, plan)
+        planned.by_plan.setdefault(plan, []).append(el)
         planned.inner = planned.inner or plan.inner
+        planned.nested = planned.nested or id(el) in inside
         for port, k in zip(ports, plan.own.values()):
             folded[id(port)] = port
             where[id(port)] = (el, plan, k)
@@ -112,6 +114,10 @@ class _Planned(dict):
         self.inside: set[int] = set()
         self.where: dict[int, tuple] = {}
         self.inner = False      # whether a plan has a set inside only
+        # each plan's instances, in tree order; whether an instance lies within another
+        # (only then can a plan's set hold a folded port)
+        self.by_plan: dict[ClassPlan, list] = {}
+        self.nested = False
 
 
 def _plan(el, keys: frozenset) -> ClassPlan | None:

@@ -227,15 +227,15 @@ def planned_nodes(flat, joined: list, planned: dict, folded: dict, signals: list
         heads.append(np.arange(at, at + len(col)))
         refs.extend(col)
 
-    by_plan: dict = {}                  # each plan's instances (a plan per class)
-    for el, plan in planned.values():
-        by_plan.setdefault(plan, []).append(el)
-    for plan, instances in by_plan.items():
+    for plan, instances in planned.by_plan.items():   # a plan per class
         children = list(map(_CHILDREN, instances))
         for owner, names_list in plan.sets:
             cols = [_ports_at(children, names) for names in names_list]
-            if any(map(folded.__contains__, map(id, chain.from_iterable(cols)))):
-                return None             # a subsystem's port within a subsystem's set
+            # a subsystem's port within a subsystem's set (only where one lies within
+            # another)
+            if planned.nested and any(map(folded.__contains__,
+                                          map(id, chain.from_iterable(cols)))):
+                return None
             at = len(refs)
             if owner is not None:
                 # the set joined to its port's inside element: a folded port's two
