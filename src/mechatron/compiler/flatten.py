@@ -1234,7 +1234,7 @@ def flatten(model: Component, name: str | None = None) -> FlatModel:
     _external_inputs(flat, model)
     try:
         with flat.context:
-            connects = _collect_equations(flat, elements, problems, planned)
+            connects = _collect_equations(flat, parts, problems, planned)
             _discrete_declarations(flat, discrete, problems)
         _connections(flat, model, elements, connects, problems, planned, folded)
     finally:
@@ -1947,6 +1947,9 @@ def _class_calls(el, method: str, where: str):
 
 def _collect_equations(flat: FlatModel, elements, problems,
                        planned=None) -> list[tuple[Connect, str]]:
+    """The equations of the components among ``elements`` (in tree order; `flatten`
+    passes the components alone) into ``flat``; returns the connects they write, each
+    with its writer."""
     connects = []
     templates: dict = {}           # class -> _Template, or None where none applies
     components = []
