@@ -421,8 +421,10 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     rank[derived] += 4
     k = np.arange(n)
     # each class together, in class order; in a class the best member first (highest
-    # rank, the first declared among equals)
-    ranked = np.lexsort((k, -rank, cls))
+    # rank, the first declared among equals): one stable sort of class and rank packed
+    # in one integer (a lexsort sorts once per key)
+    span = int(rank.max()) + 1 if n else 1
+    ranked = np.argsort(cls * span + (span - 1 - rank), kind="stable")
     head = np.r_[True, cls[ranked][1:] != cls[ranked][:-1]]
     is_best = np.zeros(n, dtype=bool)
     is_best[ranked[head]] = True
@@ -446,7 +448,7 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
         is_best[members[again[first]]] = True
     best_of = np.zeros(n, dtype=np.intp)       # the representative of each class
     best_of[cls[is_best]] = np.flatnonzero(is_best)
-    order = np.lexsort((k, cls))               # classes in order, members in order
+    order = np.argsort(cls, kind="stable")     # classes in order, members in order
 
     result.unknown_index = order[is_best[order]]
     result.unknowns = [names[j] for j in result.unknown_index.tolist()]
