@@ -28,23 +28,9 @@ def _check_timing_reported(res, steps):
     assert 0 <= s["overruns"] <= steps
 
 
-def _run_on_schedule(name, duration, rate, tries=3):
-    """A free-running run whose schedule was kept. A virtual machine's host can pause
-    the whole machine for tenths of a second; the plant then runs on with the duty
-    held, and the run reports the stall (`HILResult.longest_gap`, a note). Such a run
-    measures the pause, not the controller: it is run again, up to ``tries`` runs."""
-    for _ in range(tries):
-        res = run_hil(name, mode="sil", duration=duration, rate=rate)
-        if res.longest_gap < STALL_S * rate:
-            return res
-        assert any("stalled" in n for n in res.notes)
-    pytest.fail(f"the machine stalled the real-time loop in each of {tries} runs (the "
-                f"last: {res.longest_gap} steps without an exchange); no run to compare")
-
-
 @pytest.mark.parametrize("name,var", [("speed", "w"), ("position", "phi")])
-def test_sil_2s_at_10khz_agrees_with_mil(name, var):
-    res = _run_on_schedule(name, duration=2.0, rate=10_000.0)
+def test_sil_2s_at_10khz_agrees_with_mil(name, var, on_schedule):
+    res = on_schedule(name, duration=2.0, rate=10_000.0)
     assert res.runner["steps"] == 20_000
     _check_timing_reported(res, 20_000)
     # the percentage is recomputed here from the raw logs, not taken from the code
@@ -83,7 +69,7 @@ def _pause_the_loop(at, length):
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
-def test_a_paused_loop_reports_the_stall_and_its_cost():
+def test_a_paused_loop_reports_the_stall_and_its_cost(on_schedule):
     # paused for 0.2 s (2000 periods), the loop catches up by stepping the plant with the
     # duty held: the run names the stall, and the gap in its log spans the pause
     pauser = _pause_the_loop(at=0.3, length=0.2)
@@ -97,7 +83,7 @@ def test_a_paused_loop_reports_the_stall_and_its_cost():
     assert np.sum(got == 0) == res.runner["missed_steps"] >= gap
     assert any("stalled" in n and f"{gap} consecutive steps" in n for n in res.notes)
     # a kept schedule has no such gap, and says nothing of a stall
-    calm = _run_on_schedule("speed", duration=0.3, rate=10_000.0)
+    calm = on_schedule("speed", duration=0.3, rate=10_000.0)
     assert calm.longest_gap < STALL_S * 10_000
     assert not any("stalled" in n for n in calm.notes)
 
@@ -118,11 +104,11 @@ def test_sil_in_lockstep_reproduces_mil_to_rounding(name, var):
     assert any("lockstep" in n for n in res.notes)
 
 
-def test_sil_with_one_percent_loss_completes_counts_and_stays_stable():
+def test_sil_with_one_percent_loss_completes_counts_and_stays_stable(on_schedule):
     # the two-process bridge (its replies can come late, not only be dropped); the
     # one-process loop's accounting is tested in test_sil_loop.py
-    res = run_hil("speed", mode="sil", duration=1.0, rate=10_000.0, loss=0.01, seed=7,
-                  transport="udp")
+    res = on_schedule("speed", duration=1.0, rate=10_000.0, loss=0.01, seed=7,
+                      transport="udp")
     s = res.summary()
     assert s["steps"] == 10_000
     dropped = s["dropped_on_purpose"]["plant"] + s["dropped_on_purpose"]["controller"]

@@ -61,8 +61,8 @@ def test_one_loop_equals_mil_up_to_the_first_lost_sample(name, var):
         assert s["keep_awake"] is True
 
 
-def test_injected_loss_is_counted_once_and_filled_in_by_the_controller():
-    res = run_hil("speed", duration=0.5, rate=10_000.0, loss=0.02, seed=3)
+def test_injected_loss_is_counted_once_and_filled_in_by_the_controller(on_schedule):
+    res = on_schedule("speed", duration=0.5, rate=10_000.0, loss=0.02, seed=3)
     s, r = res.summary(), res.runner
     dropped = s["dropped_on_purpose"]["plant"] + s["dropped_on_purpose"]["controller"]
     assert 100 <= dropped <= 300                          # ~2 % of 2 x 5000
