@@ -44,8 +44,10 @@ N = 1000 compiles spread by 5 % either way and the long ones by a few tenths of 
 percent, so the fastest of thirty lies further into its spread than the fastest of
 three: the ratio of the plain minima (printed beside) reads about 0.1 high. Means and
 medians are printed beside it, with every run and its passes, user and kernel time
-apart, and what one page fault costs the machine before and after; each pass's median
-per equation at both sizes is printed with its growth (where the growth is). Its peer,
+apart, what one page fault costs the machine before and after, and what each fault of
+the large compiles cost the kernel (more where the host must back memory the machine
+has not touched lately); each pass's median per equation at both sizes is printed with
+its growth (where the growth is). Its peer,
 run beside each compile in a fresh process: the same structural passes written by hand
 on NumPy/SciPy arrays (``structure_on_arrays``: flattening, connection sets, alias
 elimination, matching, BLT; no symbolic expressions), with its own growth and the
@@ -563,6 +565,11 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
     # faults (the kernel splits a process's CPU time into user and system by samples:
     # the split of one short run is off by a few percent, hence the medians beside)
     growth_user = _growth_of(split[small]["user"], split[large]["user"])
+    # what a page fault of the large compiles cost the kernel: the probe's fresh page
+    # (fresh_page_cost) is a page the host already backs; a compile that outgrows the
+    # memory the machine touched lately also waits for the host to back its pages
+    per_fault = [1e6 * r["system_s"] / r["minor_page_faults"] for r in runs[large]
+                 if r["minor_page_faults"]]
     # the peer: the same structural passes on arrays, without symbolic expressions
     on_arrays = {str(n): {"us_per_equation": [r["us_per_equation"] for r in rs],
                           "min": min(r["us_per_equation"] for r in rs),
@@ -581,7 +588,9 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
         f"{spells[1]['slow_share']:.2f}; user time alone: minima over equally many runs "
         f"{growth_user['min_equal_draws']:.3f}, plain {growth_user['min']:.3f}, "
         f"medians {growth_user['median']:.3f}; a fresh page "
-        f"{pages[0]['us_per_page']:.2f} and {pages[1]['us_per_page']:.2f} us")
+        f"{pages[0]['us_per_page']:.2f} and {pages[1]['us_per_page']:.2f} us, a fault of "
+        f"the N={large} compiles "
+        + "/".join(f"{c:.1f}" for c in per_fault) + " us")
     # where the growth is: each pass's median per equation at both sizes
     per_pass = {key: {str(n): statistics.median(p[key] for p in stats[str(n)][
                     "passes_us_per_equation"]) for n in (small, large)}
@@ -595,6 +604,7 @@ def compile_growth(rounds: int = 4, small: int = 1000, large: int = LARGE,
             "passes_median_us_per_equation": per_pass,
             "met": growth["min_equal_draws"] < 1.3, "machine_spells_before_after": spells,
             "fresh_page_cost_before_after": pages,
+            "kernel_us_per_fault_large": per_fault,
             "peer_structure_on_arrays": {"sizes": on_arrays, "growth": peer_growth,
                                          "compile_over_peer_min": {
                                              str(small): a["min"] / pa["min"],
