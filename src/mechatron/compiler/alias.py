@@ -482,13 +482,12 @@ def _kept_residuals(kept: EquationRows, pending: list, flat,
     only the rows some instance keeps, and the other residuals substituted at once."""
     waiting = {id(t): t for t in pending}
     rows: dict = {}                  # id(template) -> its rows that are kept
-    # a kept row read from a template formed here: (its place, the template's id)
-    from_template = [(k, id(eq.template)) for k, eq in
+    # a kept equation object that is a row of a template formed here: (its place, it)
+    from_template = [(k, eq) for k, eq in
                      zip(np.flatnonzero(kept.which < 0).tolist(), kept.objects)
                      if type(eq) is _TemplateEquation and id(eq.template) in waiting]
-    for k, key in from_template:
-        eq = kept.objects[kept.rows[k]]
-        rows.setdefault(key, set()).add(eq.row % eq.template.n_eq)
+    for _, eq in from_template:
+        rows.setdefault(id(eq.template), set()).add(eq.row % eq.template.n_eq)
     groups = list(kept.by_template())
     for tpl, places in groups:
         if id(tpl) in waiting:
@@ -515,9 +514,9 @@ def _kept_residuals(kept: EquationRows, pending: list, flat,
         if got is not None:
             instance, k = np.divmod(kept.rows[places], got[1])
             index[places] = offset[id(tpl)] + instance * got[2] + got[3][k]
-    for k, key in from_template:
-        eq = kept.objects[kept.rows[k]]
-        column, n_eq, m, at = place[key]
+    for k, eq in from_template:
+        key = id(eq.template)
+        _, n_eq, m, at = place[key]
         instance, j = divmod(eq.row, n_eq)
         index[k] = offset[key] + instance * m + at[j]
     rest_at = np.flatnonzero(index < 0)

@@ -600,7 +600,7 @@ class _TemplateEquation(FlatEquation):
             tpl = self.template
             if tpl.column is None and tpl.pending is None and not tpl.replaced:
                 return None                     # not instantiated, or let go
-            column, r = _template_row(self)
+            column, r = _row_of(tpl, self.row)
             if column is not None:
                 r = column[r]
             _RESIDUAL_SLOT.__set__(self, r)
@@ -940,15 +940,10 @@ def stack_residuals(eqs) -> ca.SX:
 def _residual_of(eq) -> tuple:
     """``(column, row)`` of ``eq``'s residual, or ``(None, residual)`` (see `_gather`)."""
     if type(eq) is _TemplateEquation and _RESIDUAL_SLOT.__get__(eq) is None:
-        return _template_row(eq)
+        return _row_of(eq.template, eq.row)
     if type(eq) is _SumEquation and _RESIDUAL_SLOT.__get__(eq) is None:
         return eq.column, eq.row
     return None, eq.residual
-
-
-def _template_row(eq) -> tuple:
-    """``(column, row)`` of a template equation's residual (`_row_of`)."""
-    return _row_of(eq.template, eq.row)
 
 
 def _row_of(tpl, row: int) -> tuple:
