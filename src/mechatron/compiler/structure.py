@@ -18,8 +18,8 @@ import casadi as ca
 import numpy as np
 
 from mechatron.compiler.flatten import ColumnRows, Origins, stack_columns
-from mechatron.compiler.graph import (block_lower_triangular, dummy_derivatives,
-                                      maximum_matching, pantelides, tear)
+from mechatron.compiler.graph import (block_order, dummy_derivatives, maximum_matching,
+                                      pantelides, tear)
 from mechatron.compiler.linear import (DENSE_ROW, Combined, jacobian_apart, owner_of,
                                        reveal, sparse_jacobian)
 from mechatron.compiler.pivoting import largest, pivot_columns
@@ -361,16 +361,17 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
         m = ir.matching
     if -1 in m.eq_to_var or any(e == -1 and ok for e, ok in zip(m.var_to_eq, allowed)):
         _raise_structural(name, res, orig, var_names, m, allowed, hints)
-    blocks = block_lower_triangular(len(var_syms), adj, m)
+    # the blocks as arrays: most are one equation, and a model of 10^5 components has
+    # as many (see `BlockOrder`)
+    blocks = block_order(len(var_syms), adj, m)
+    sizes = blocks.sizes()
     if pref and differentiated:
-        for block in blocks:
-            if len(block.equations) > 1:
-                _check_selection(name, res, orig, var_syms, var_names, block, guess)
+        for k in np.flatnonzero(sizes > 1).tolist():
+            _check_selection(name, res, orig, var_syms, var_names, blocks.block(k), guess)
     else:
-        for block in blocks:
-            if 1 < len(block.equations) <= _LOOP_CHECK_MAX:
-                _check_loop(name, res, orig, var_syms, var_names, block, guess, time,
-                            physical or set())
+        for k in np.flatnonzero((sizes > 1) & (sizes <= _LOOP_CHECK_MAX)).tolist():
+            _check_loop(name, res, orig, var_syms, var_names, blocks.block(k), guess,
+                        time, physical or set())
     # the states' symbols and derivatives are read off their columns at the end: read
     # one by one here, they would form every unknown's symbol (see ColumnRows)
     out = Lowered(states=[var_names[v] for v in states], state_syms=[],
@@ -396,61 +397,78 @@ def _lower(name, residuals, origins, unknowns, syms, derivative, time, start_gue
 
     # the given equations and their Jacobian (from `reveal`) serve the one-equation
     # blocks, unless index reduction replaced or added equations among them
-    singles = [(b.equations[0], b.variables[0]) for b in blocks if len(b.equations) == 1]
-    es, single_vs = (list(a) for a in zip(*singles)) if singles else ([], [])
+    ones = np.flatnonzero(sizes == 1)
+    firsts = blocks.ptr[ones]
+    es, single_vs = blocks.equations[firsts].tolist(), blocks.variables[firsts].tolist()
     given = None
-    if res and reduction.jacobian is not None and (not singles or (
+    if res and reduction.jacobian is not None and (not es or (
             max(es) < n_orig and max(single_vs) < var_vec.numel()
             and not (reduced and any(e in reduced for e in es)))):
         given = (res_vec, var_vec, reduction.jacobian, pattern, reduction.entries)
-    bulk_x, bulk_solved, bulk_sols, bulk_at = _solve_singles(res, var_syms, singles, given)
-    out.largest_block = max((len(b.equations) for b in blocks), default=0)
-    # the assignments in block order: the bulk solutions stay stacked (an index into
-    # them), the others are scalars (-1 - their index); one gather orders them at the end
-    order: list[int] = []
+    bulk_x, bulk_solved, bulk_sols = _solve_singles(res, var_syms, es, single_vs, given)
+    del es, single_vs
+    out.largest_block = int(sizes.max()) if sizes.size else 0
+    # each block's place among the bulk solutions (-1 for a block solved on its own)
+    bulk = np.full(len(blocks), -1, dtype=np.intp)
+    bulk[ones[bulk_solved]] = np.arange(len(bulk_solved))
+    # the blocks solved on their own, in block order: their assignments are scalars
     syms: list[ca.SX] = []
     exprs: list[ca.SX] = []
-    assigned_vars: list[int] = []   # the variable of each assignment, in block order
+    assigned_vars: list[int] = []   # the variable of each of them
+    marks: list[int] = []           # how many there were before each block
 
     def assign(v: int, expr: ca.SX) -> None:
-        order.append(-1 - len(syms))
         syms.append(var_syms[v])
         assigned_vars.append(v)
         exprs.append(expr)
 
-    for block in blocks:
-        eqs, vs = block.equations, block.variables
-        if len(eqs) == 1:
-            e, v = eqs[0], vs[0]
-            k = bulk_at.get(e)
-            if k is not None:
-                order.append(k)
-                assigned_vars.append(v)
-                continue
-            quick = _explicit(res[e], var_syms[v])
-            if quick is not None:
-                assign(v, quick)
-                continue
-            coef = coefficient(e, v)
-            if coef is not None:
-                assign(v, _solve_linear(res[e], var_syms[v], coef))
-            else:
-                out.alg.append(var_names[v])
-                out.alg_syms.append(var_syms[v])
-                out.residuals.append(res[e])
+    rest = np.flatnonzero(bulk < 0)
+    at = blocks.ptr[rest]
+    for k, size, e, v in zip(rest.tolist(), sizes[rest].tolist(),
+                             blocks.equations[at].tolist(), blocks.variables[at].tolist()):
+        marks.append(len(syms))
+        if size > 1:
+            block = blocks.block(k)
+            _solve_block(out, assign, block.equations, block.variables, adj, res,
+                         var_syms, var_names, coefficient, unknown_names)
             continue
-        _solve_block(out, assign, eqs, vs, adj, res, var_syms, var_names, coefficient,
-                     unknown_names)
-    if order:
-        # one copy of each stacked vector in the order of the blocks: the solved
-        # variables read off the singles' column, the expressions off their pieces
+        quick = _explicit(res[e], var_syms[v])
+        if quick is not None:
+            assign(v, quick)
+            continue
+        coef = coefficient(e, v)
+        if coef is not None:
+            assign(v, _solve_linear(res[e], var_syms[v], coef))
+        else:
+            out.alg.append(var_names[v])
+            out.alg_syms.append(var_syms[v])
+            out.residuals.append(res[e])
+    if bulk_solved or syms:
+        # the assignments in block order: one from each block solved in bulk (its row
+        # among the stacked bulk solutions), those of the others after them (their
+        # scalars stacked after the bulk's); one gather of each stacked vector orders
+        # them
+        count = (bulk >= 0).astype(np.intp)
+        count[rest] = np.diff(np.append(marks, len(syms)))
+        start = np.cumsum(count) - count
         n_x, n_bulk = bulk_x.numel(), len(bulk_solved)
+        x_rows = np.empty(count.sum(), dtype=np.intp)
+        e_rows = np.empty_like(x_rows)
+        out.assigned_rows = np.empty_like(x_rows)
+        done = np.flatnonzero(bulk >= 0)
+        x_rows[start[done]] = np.asarray(bulk_solved, dtype=np.intp)[bulk[done]]
+        e_rows[start[done]] = bulk[done]
+        out.assigned_rows[start[done]] = blocks.variables[blocks.ptr[done]]
+        if syms:
+            c = count[rest]
+            places = np.repeat(start[rest] - (np.cumsum(c) - c), c) + np.arange(len(syms))
+            x_rows[places] = n_x + np.arange(len(syms))
+            e_rows[places] = n_bulk + np.arange(len(syms))
+            out.assigned_rows[places] = assigned_vars
         out.assigned = (stack_columns(bulk_x, ca.vertcat(*syms)) if syms else bulk_x)[
-            [bulk_solved[k] if k >= 0 else n_x - 1 - k for k in order]]
+            x_rows.tolist()]
         out.assigned_expr = stack_columns(*bulk_sols, *([ca.vertcat(*exprs)] if exprs
-                                                         else []))[
-            [k if k >= 0 else n_bulk - 1 - k for k in order]]
-        out.assigned_rows = np.asarray(assigned_vars, dtype=np.intp)
+                                                         else []))[e_rows.tolist()]
     ders = [var_to_diff[v] for v in states]
     out.state_col, out.ode_col = (
         var_vec[rows] if res and (not rows or max(rows) < var_vec.numel())
@@ -622,33 +640,30 @@ def _is_symbol(expr: ca.SX, name: str) -> bool:
     return expr.is_symbolic() and expr.name() == name
 
 
-def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
-                   singles: list[tuple[int, int]],
-                   given: tuple | None = None) -> tuple[ca.SX, list[int], list[ca.SX],
-                                                        dict[int, int]]:
-    """Solve the one-equation blocks ``(e, v)`` together, in a few calls over all of
-    them, with the same result as `_solve_linear` one by one: ``x = -e(x = 0) / J``,
-    where ``J = de/dx`` is free of ``x`` and not 0.
+def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX], es: list[int], vs: list[int],
+                   given: tuple | None = None) -> tuple[ca.SX, list[int], list[ca.SX]]:
+    """Solve the one-equation blocks (equation ``es[i]`` for variable ``vs[i]``)
+    together, in a few calls over all of them, with the same result as `_solve_linear`
+    one by one: ``x = -e(x = 0) / J``, where ``J = de/dx`` is free of ``x`` and not 0.
 
     Every ``J`` comes from one Jacobian. ``e(x = 0)`` must zero the block's own variable
     only, not the variables of other blocks that appear in ``e``: the blocks are
     coloured so that no equation holds the variable of another block of its colour
     (greedy, on the integer incidence; a BLT chain needs a few colours), and each colour
     takes one substitution (in pieces on a long colour, `_zeroed`). Returns ``(X,
-    solved, exprs, at)``: the variables of all the blocks stacked, the rows of X solved
-    (colour by colour), the expressions of those rows in pieces (one per colour, to be
-    stacked once by the caller), and ``{e: place among the solved}``; the others (not
-    linear in their variable) are left to the equation-by-equation path.
+    solved, exprs)``: the variables of all the blocks stacked, the rows of X solved
+    (colour by colour; row ``i`` is block ``i``'s), and the expressions of those rows in
+    pieces (one per colour, to be stacked once by the caller); the others (not linear
+    in their variable) are left to the equation-by-equation path.
 
     ``given = (R, V, J, S, entries)``: the residuals and variables stacked, the
     Jacobian of R in V, its sparsity and the rows and columns of its entries (column by
     column, `mechatron.compiler.linear.Reduction.entries`); each block's equation is
     then a row of R, its variable a row of V, and all of these are read instead of
     computed again."""
-    n = len(singles)
+    n = len(es)
     if n < 2:
-        return ca.SX(0, 1), [], [], {}
-    es, vs = (list(a) for a in zip(*singles))
+        return ca.SX(0, 1), [], []
     if given is not None:
         R, V, J, S, entries = given
         E, X = R[es], V[vs]
@@ -707,9 +722,7 @@ def _solve_singles(res: list[ca.SX], var_syms: list[ca.SX],
         # vertcat of the scalars converts each one from Python)
         ex, xs, ds = E[idx], X[idx], d[idx]
         sols.append(-_zeroed(ex, xs) / ds)
-    solved = [i for idx in classes for i in idx]
-    at = {es[i]: k for k, i in enumerate(solved)}
-    return X, solved, sols, at
+    return X, [i for idx in classes for i in idx], sols
 
 
 def _zeroed(ex: ca.SX, xs: ca.SX) -> ca.SX:

@@ -1,11 +1,12 @@
-"""Tests of `strongly_connected_components` and `block_lower_triangular`."""
+"""Tests of `strongly_connected_components`, `block_lower_triangular` and
+`block_order`."""
 
 import random
 
 import pytest
 
-from mechatron.compiler.graph import (Block, block_lower_triangular, maximum_matching,
-                                      strongly_connected_components)
+from mechatron.compiler.graph import (Block, block_lower_triangular, block_order,
+                                      maximum_matching, strongly_connected_components)
 from mechatron.compiler.graph.matching import Matching
 
 
@@ -165,3 +166,30 @@ def test_blt_order_follows_tarjan_on_the_dependency_graph(seed):
     blocks = block_lower_triangular(n, adj, m)
     assert [b.equations for b in blocks] == expected
     assert all(b.variables == [m.eq_to_var[e] for e in b.equations] for b in blocks)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_block_order_holds_the_blocks_of_tarjan_as_arrays(seed):
+    """`block_order` on a graph where some equations are left unmatched (more equations
+    than variables, some equations of no variable): its arrays hold, block by block, the
+    components of Tarjan's recursion on the dependency graph of the matched equations,
+    each with its matched variables, and read as the same `Block` objects."""
+    rng = random.Random(300 + seed)
+    n_var = rng.randint(1, 25)
+    n_eq = n_var + rng.randint(0, 6)
+    adj = [sorted(rng.sample(range(n_var), rng.randint(0, min(3, n_var))))
+           for _ in range(n_eq)]
+    m = maximum_matching(n_var, adj)
+    matched = {e for e, v in enumerate(m.eq_to_var) if v != -1}
+    succ = [[m.var_to_eq[v] for v in row if m.var_to_eq[v] != -1 and m.var_to_eq[v] != e]
+            if e in matched else [] for e, row in enumerate(adj)]
+    expected = [c for c in tarjan_by_recursion(n_eq, succ) if c[0] in matched]
+    order = block_order(n_var, adj, m)
+    assert len(order) == len(expected)
+    assert order.sizes().tolist() == [len(c) for c in expected]
+    assert order.equations.tolist() == [e for c in expected for e in c]
+    assert order.variables.tolist() == [m.eq_to_var[e] for c in expected for e in c]
+    blocks = [Block(c, [m.eq_to_var[e] for e in c]) for c in expected]
+    assert list(order) == blocks
+    assert [order.block(k) for k in range(len(order))] == blocks
+    assert block_lower_triangular(n_var, adj, m) == blocks

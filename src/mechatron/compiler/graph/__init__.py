@@ -16,14 +16,16 @@ The passes, in the order a compiler runs them:
 - `dummy_derivatives` and `state_selection`: choose which derivatives become algebraic
   and which variables stay states.
 - `block_lower_triangular` (on `strongly_connected_components`): order the matched
-  equations into blocks solvable one after another.
+  equations into blocks solvable one after another; `block_order` gives them as
+  arrays (`BlockOrder`).
 - `tear`: reduce each algebraic loop to a few tearing variables and residuals.
 
 Every pass is iterative (no recursion) and runs in near-linear time, so systems of
 100,000 equations are routine.
 """
 
-from .blt import Block, block_lower_triangular, strongly_connected_components
+from .blt import (Block, BlockOrder, block_lower_triangular, block_order,
+                  strongly_connected_components)
 from .dummy import dummy_derivatives, state_selection
 from .matching import UNMATCHED, Matching, maximum_matching
 from .pantelides import IndexReduction, derivative_chains, pantelides
@@ -41,6 +43,8 @@ __all__ = [
     "Block",
     "strongly_connected_components",
     "block_lower_triangular",
+    "BlockOrder",
+    "block_order",
     "Tearing",
     "tear",
 ]
