@@ -386,9 +386,10 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
         f = f * f[up]
         up = nxt
     up, f = up[:n], f[:n]             # the model's variables (see node())
-    roots, first = np.unique(up, return_index=True)
-    position = np.zeros(len(parent), dtype=np.intp)   # a class's place: its first member
-    position[roots] = first
+    # a class's place: its first member (the least number that has the root; one pass,
+    # where a sort to find the first of each costs n log n)
+    position = np.full(len(parent), n, dtype=np.intp)
+    np.minimum.at(position, up, np.arange(n, dtype=np.intp))
     cls = position[up]
     is_const = np.zeros(len(parent), dtype=bool)
     value = np.zeros(len(parent))     # the constant of a class, at its root
