@@ -35,13 +35,18 @@ def _no_null(obj, path="summary"):
 @pytest.mark.parametrize("name,var", [("speed", "w"), ("position", "phi")])
 def test_one_loop_equals_mil_up_to_the_first_lost_sample(name, var):
     # a real-time run on a shared machine may lose a sample early (a step that starts a
-    # period late skips its exchange): up to three runs, the one lossless the longest
-    for _attempt in range(3):
+    # period late skips its exchange; on a busy host about every other run loses one in
+    # its first 500 steps): up to eight runs, the one lossless the longest
+    best = None
+    for _attempt in range(8):
         res = run_hil(name, duration=0.3, rate=10_000.0)
         got = res.log["got"] == 1
         n = int(np.argmin(got)) if not got.all() else got.size
+        if best is None or n > best[0]:
+            best = (n, res, got)
         if n > 500:
             break
+    n, res, got = best
     s = res.summary()
     assert s["transport"] == "sim" and s["steps"] == 3000
     assert n > 500                     # the reference step at 0.05 s is inside
