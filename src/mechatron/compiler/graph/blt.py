@@ -124,7 +124,6 @@ def _components(n: int, succ: Sequence[Sequence[int]]) -> tuple[list[int], list[
     return nodes, ends
 
 
-
 def block_lower_triangular(n_var: int, adj: Sequence[Sequence[int]],
                            matching: Matching) -> list[Block]:
     """Order the matched equations into blocks that can be solved one after another.
