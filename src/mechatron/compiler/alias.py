@@ -388,8 +388,9 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     up, f = up[:n], f[:n]             # the model's variables (see node())
     # a class's place: its first member (the least number that has the root; one pass,
     # where a sort to find the first of each costs n log n)
+    k = np.arange(n)
     position = np.full(len(parent), n, dtype=np.intp)
-    np.minimum.at(position, up, np.arange(n, dtype=np.intp))
+    np.minimum.at(position, up, k)
     cls = position[up]
     is_const = np.zeros(len(parent), dtype=bool)
     value = np.zeros(len(parent))     # the constant of a class, at its root
@@ -420,7 +421,6 @@ def _classes(flat, names, index, parent, factor, const, result, derived) -> np.n
     rank = np.array([8 * (_PRIORITY_RANK.get(key[1], 0) if key[0] else 0) +
                      _KIND_RANK.get(key[2], 0) for key in table], dtype=np.int64)[codes]
     rank[derived] += 4
-    k = np.arange(n)
     # each class together, in class order; in a class the best member first (highest
     # rank, the first declared among equals): one stable sort of class and rank packed
     # in one integer (a lexsort sorts once per key)
